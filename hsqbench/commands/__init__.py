@@ -1,0 +1,1 @@
+"""Subcommands of the ``hsqbench`` CLI, one module each (see ``hsqbench.cli``)."""
