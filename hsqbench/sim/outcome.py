@@ -1,0 +1,116 @@
+"""What one grasp attempt, one isolated trial and one packed round produce.
+
+These records are the contract between the trial runner (``hsqbench.sim.trial``) and the
+experiment code (``hsqbench.experiment``): one CSV row per attempt and one per packed round.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from enum import StrEnum
+from typing import Any
+
+
+class Outcome(StrEnum):
+    """The fixed list of attempt outcomes."""
+
+    SUCCESS = "success"
+    NO_GRASP_FOUND = "no_grasp_found"
+    UNREACHABLE = "unreachable"
+    COLLISION_ON_APPROACH = "collision_on_approach"
+    EMPTY_GRASP = "empty_grasp"
+    DROPPED = "dropped"
+    SIM_UNSTABLE = "sim_unstable"
+
+
+@dataclass
+class Attempt:
+    """One grasp attempt.
+
+    Attributes:
+        outcome: one of :class:`Outcome`.
+        target: name of the object grasped (or the object that was meant, for failures; ``""``
+            when no grasp was found).
+        rank_executed: 0-based rank of the executed grasp in the planner's list (-1 if none).
+        n_grasps: number of grasps the planner returned.
+        score: score of the executed grasp (NaN if none); ``factors`` holds its h_alpha, h_beta,
+            h_gamma, h_delta when the planner provides them.
+        width_m: planned opening width of the executed grasp, metres.
+        perception_s, planning_s, execution_s: wall-clock seconds of each phase.
+        detail: a short human-readable reason (which IK failed, which contact was hit, ...).
+    """
+
+    outcome: Outcome
+    target: str = ""
+    rank_executed: int = -1
+    n_grasps: int = 0
+    score: float = float("nan")
+    factors: dict[str, float] = field(default_factory=dict)
+    width_m: float = float("nan")
+    perception_s: float = 0.0
+    planning_s: float = 0.0
+    execution_s: float = 0.0
+    detail: str = ""
+
+    @property
+    def success(self) -> bool:
+        return self.outcome == Outcome.SUCCESS
+
+    def to_dict(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["outcome"] = str(self.outcome)
+        return out
+
+
+@dataclass
+class TrialResult:
+    """An isolated-object trial: one object, one attempt (the paper's protocol)."""
+
+    object: str
+    seed: int
+    planner: str
+    attempts: list[Attempt]
+
+    @property
+    def success(self) -> bool:
+        return bool(self.attempts) and self.attempts[-1].success
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kind": "isolated",
+            "object": self.object,
+            "seed": self.seed,
+            "planner": self.planner,
+            "success": self.success,
+            "attempts": [a.to_dict() for a in self.attempts],
+        }
+
+
+@dataclass
+class RoundResult:
+    """A packed round: attempts until the workspace is empty or two consecutive failures."""
+
+    objects: list[str]
+    seed: int
+    planner: str
+    attempts: list[Attempt]
+    objects_cleared: list[str]
+
+    @property
+    def objects_presented(self) -> int:
+        return len(self.objects)
+
+    @property
+    def clearance_rate(self) -> float:
+        return len(self.objects_cleared) / max(1, len(self.objects))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kind": "packed",
+            "objects": list(self.objects),
+            "seed": self.seed,
+            "planner": self.planner,
+            "objects_presented": self.objects_presented,
+            "objects_cleared": list(self.objects_cleared),
+            "attempts": [a.to_dict() for a in self.attempts],
+        }
