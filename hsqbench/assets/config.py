@@ -20,14 +20,15 @@ class CoacdConfig:
     decimation) before CoACD, which is the slow step; 0 disables it.
     """
 
-    threshold: float = 0.07
-    max_convex_hull: int = 20
+    threshold: float = 0.08
+    max_convex_hull: int = 16
     preprocess_mode: str = "auto"
     preprocess_resolution: int = 40
     resolution: int = 2000
     mcts_nodes: int = 20
-    mcts_iterations: int = 100
+    mcts_iterations: int = 60
     mcts_max_depth: int = 3
+    decimate: bool = True
     max_ch_vertex: int = 128
     seed: int = 0
     pre_simplify_faces: int = 3000

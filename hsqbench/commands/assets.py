@@ -1,0 +1,196 @@
+"""``hsqbench assets``: list, build, download and import the objects of the library."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+HELP = "list, build, download (YCB, CC BY 4.0) or import the objects of the library"
+
+_EPILOG = """\
+Sources: YCB objects from HSQ_YCB_DIR (<name>/textured.obj + objects.csv), built-in procedural
+shapes (proc_*), and meshes registered with `assets import`. Built assets are cached in
+HSQ_CACHE_DIR (default assets/build/) by a hash of the mesh files and build parameters.
+
+The YCB Object and Model Set (Calli et al., IEEE RAM 2015) is licensed CC BY 4.0: keep the
+ATTRIBUTION.md written by `assets download` with the meshes, and credit YCB in results.
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = _EPILOG
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.add_argument(
+        "--config", default="assets", help="assets config (name in configs/ or a YAML path)"
+    )
+    sub = parser.add_subparsers(dest="assets_command", metavar="ACTION", required=True)
+
+    p = sub.add_parser(
+        "list", help="show each object: source, mass, size, hull count, built or not"
+    )
+    p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="only this source")
+
+    p = sub.add_parser("build", help="build objects (convex decomposition, inertia, MuJoCo meshes)")
+    p.add_argument("names", nargs="*", metavar="NAME", help="objects to build (default: all)")
+    p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="only this source")
+    p.add_argument("--jobs", type=int, default=None, help="objects built at once (default: config)")
+
+    p = sub.add_parser(
+        "download",
+        help="fetch the Google 16k YCB scans (CC BY 4.0) into DEST for HSQ_YCB_DIR",
+        description="Fetch the Google 16k YCB scans from the official YCB source into DEST, laid "
+        "out for HSQ_YCB_DIR. The models are CC BY 4.0: DEST/ATTRIBUTION.md credits them.",
+    )
+    p.add_argument("names", nargs="*", metavar="NAME", help="YCB objects (default: all 15)")
+    p.add_argument(
+        "--dest", type=Path, required=True, help="folder to write (then export HSQ_YCB_DIR=DEST)"
+    )
+    p.add_argument(
+        "--base-url", default=None, help="archive server (default: download.base_url in the config)"
+    )
+    p.add_argument("--force", action="store_true", help="download again objects already present")
+    p.add_argument(
+        "--keep-archives", action="store_true", help="keep the .tgz files in DEST/.download"
+    )
+
+    p = sub.add_parser("import", help="register (and build) a folder of meshes (obj/stl/ply)")
+    p.add_argument("folder", type=Path, metavar="DIR")
+    p.add_argument(
+        "--density", type=float, default=None, help="kg/m^3 (default: importer.density_kg_m3)"
+    )
+    p.add_argument(
+        "--scale",
+        type=float,
+        default=1.0,
+        help="multiplies coordinates to get metres (0.001 for mm)",
+    )
+    p.add_argument(
+        "--up",
+        choices=["z", "y", "x", "stable"],
+        default="z",
+        help="file axis that points up; 'stable': most probable resting pose (default: z)",
+    )
+    p.add_argument("--prefix", default="", help="prepended to every object name")
+    p.add_argument("--no-build", action="store_true", help="only register the meshes")
+    p.add_argument("--jobs", type=int, default=None, help="objects built at once (default: config)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from hsqbench.assets.config import load_assets_config
+
+    config = load_assets_config(args.config)
+    action = args.assets_command
+    if action == "list":
+        return _list(config, args.source)
+    if action == "build":
+        return _build(config, args.names, args.source, args.jobs)
+    if action == "download":
+        return _download(config, args)
+    return _import(config, args)
+
+
+def _list(config, source: str | None) -> int:
+    from hsqbench.assets.build import load_cached
+    from hsqbench.assets.library import object_names, object_spec
+    from hsqbench.settings import cache_dir
+
+    names = object_names(source, config)
+    rows = [("name", "source", "mass_kg", "size_mm (x y z)", "hulls", "built")]
+    for name in names:
+        spec = object_spec(name, config)
+        asset = load_cached(spec, config, cache_dir())
+        mass = asset.mass_kg if asset else spec.mass_kg
+        rows.append(
+            (
+                name,
+                spec.source,
+                "-" if mass is None else f"{mass:.3f}",
+                "-" if asset is None else " ".join(f"{1000 * e:.0f}" for e in asset.extents),
+                "-" if asset is None else str(len(asset.collision_meshes)),
+                "yes" if asset else "no",
+            )
+        )
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
+    built = sum(r[-1] == "yes" for r in rows[1:])
+    print(f"{len(names)} objects, {built} built (cache: {cache_dir()})")
+    return 0
+
+
+def _build(config, names: list[str], source: str | None, jobs: int | None) -> int:
+    import warnings
+
+    from hsqbench.assets.library import build_objects, object_names
+
+    names = names or object_names(source, config)
+    if not names:
+        print("no objects to build")
+        return 0
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        assets = build_objects(names, jobs=jobs, config=config)
+    for a in assets:
+        info = a.info
+        note = (
+            "" if info.get("collision_method", "coacd") == "coacd" else "  (convex-hull fallback)"
+        )
+        print(
+            f"{a.name:24s} {a.source:10s} {a.mass_kg:7.3f} kg  {len(a.collision_meshes):3d} hulls  "
+            f"inertia from {info.get('inertia_method', '?'):11s} built in {info.get('build_s', 0):6.1f} s{note}"
+        )
+    print(f"{len(assets)} objects ready in {time.perf_counter() - start:.1f} s")
+    return 0
+
+
+def _download(config, args: argparse.Namespace) -> int:
+    from hsqbench.assets.download import download_ycb
+
+    report = download_ycb(
+        args.dest,
+        config.download,
+        names=args.names or None,
+        base_url=args.base_url,
+        force=args.force,
+        keep_archives=args.keep_archives,
+    )
+    print(
+        f"downloaded {len(report.downloaded)}, already present {len(report.skipped)}, failed {len(report.failed)}"
+    )
+    for name, why in report.failed.items():
+        print(f"  {name}: {why}")
+    if report.failed:
+        raise RuntimeError(
+            f"{len(report.failed)} object(s) failed; run the same command again to retry"
+        )
+    print(f"now: export HSQ_YCB_DIR={os.path.abspath(args.dest)}")
+    return 0
+
+
+def _import(config, args: argparse.Namespace) -> int:
+    from hsqbench.assets.importer import register
+    from hsqbench.assets.library import object_names
+    from hsqbench.settings import cache_dir
+
+    density = args.density if args.density is not None else config.importer.density_kg_m3
+    if not density > 0:
+        raise ValueError(f"--density must be > 0 kg/m^3, got {density}")
+    reserved = set(object_names("ycb", config)) | set(object_names("procedural", config))
+    reserved |= {o.name for o in config.download.objects}
+    specs = register(
+        args.folder,
+        cache_dir(),
+        reserved,
+        density_kg_m3=density,
+        scale=args.scale,
+        up=args.up,
+        prefix=args.prefix,
+        rgba=config.importer.rgba,
+    )
+    print(f"registered {len(specs)} object(s): {', '.join(s.name for s in specs)}")
+    if args.no_build:
+        return 0
+    return _build(config, [s.name for s in specs], None, args.jobs)
