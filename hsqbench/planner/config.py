@@ -19,7 +19,74 @@ class RecoveryConfig:
 
 @dataclass(frozen=True)
 class GraspConfig:
-    """Stage two: grasp synthesis, elimination and scoring."""
+    """Stage two: grasp synthesis, elimination and scoring (``hsqbench.planner.synthesis``,
+    ``elimination``, ``scoring``).
+
+    Lengths in metres, angles in degrees, the q's as in the paper. Reasons for each default are in
+    the ``grasp:`` section of ``configs/planner.yaml``.
+    """
+
+    # The gripper: a name in configs/ or a YAML path, loaded into GripperModel.
+    gripper: str = "gripper"
+    # Synthesis.
+    roll_step_deg: float = 10.0
+    slide_step_m: float = 0.015
+    rotate_step_deg: float = 22.5
+    flat_eps_max: float = 0.5
+    round_eps2_tol: float = 0.25
+    round_axis_ratio_tol: float = 0.1
+    max_tilt_deg: float = 15.0
+    # Elimination.
+    elimination_voxel_m: float = 0.003
+    opening_margin_m: float = 0.004
+    support_radius_m: float = 0.01
+    support_depth_m: float = 0.01
+    support_min_points: int = 5
+    support_min_fraction: float = 0.25
+    approach_distance_m: float = 0.05
+    table_clearance_m: float = 0.003
+    # Scoring.
+    q_alpha: float = 0.002
+    q_gamma: float = 0.5
+    q_delta: float = 0.005
+    alpha_unit_m: float = 0.1
+    contact_radius_m: float = 0.0085
+
+    def __post_init__(self) -> None:
+        positive = {
+            "roll_step_deg": self.roll_step_deg,
+            "slide_step_m": self.slide_step_m,
+            "rotate_step_deg": self.rotate_step_deg,
+            "elimination_voxel_m": self.elimination_voxel_m,
+            "support_radius_m": self.support_radius_m,
+            "support_depth_m": self.support_depth_m,
+            "q_alpha": self.q_alpha,
+            "q_gamma": self.q_gamma,
+            "q_delta": self.q_delta,
+            "contact_radius_m": self.contact_radius_m,
+            "alpha_unit_m": self.alpha_unit_m,
+        }
+        for key, value in positive.items():
+            if not value > 0:
+                raise ValueError(f"grasp.{key} must be > 0, got {value}")
+        for key in ("roll_step_deg", "rotate_step_deg"):
+            step = getattr(self, key)
+            if abs(360.0 / step - round(360.0 / step)) > 1e-9:
+                raise ValueError(f"grasp.{key} must divide 360 degrees evenly, got {step}")
+        non_negative = {
+            "flat_eps_max": self.flat_eps_max,
+            "round_eps2_tol": self.round_eps2_tol,
+            "round_axis_ratio_tol": self.round_axis_ratio_tol,
+            "max_tilt_deg": self.max_tilt_deg,
+            "opening_margin_m": self.opening_margin_m,
+            "support_min_points": self.support_min_points,
+            "support_min_fraction": self.support_min_fraction,
+            "approach_distance_m": self.approach_distance_m,
+            "table_clearance_m": self.table_clearance_m,
+        }
+        for key, value in non_negative.items():
+            if not value >= 0:
+                raise ValueError(f"grasp.{key} must be >= 0, got {value}")
 
 
 @dataclass(frozen=True)

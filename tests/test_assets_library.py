@@ -1,0 +1,136 @@
+"""The library interface: names, lookup, get_object, parallel builds (hsqbench.assets.library)."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+import trimesh
+from PIL import Image
+
+from hsqbench.assets.config import load_assets_config
+from hsqbench.assets.library import (
+    UnknownObjectError,
+    build_objects,
+    get_object,
+    is_built,
+    object_names,
+    ycb_names,
+)
+from hsqbench.assets.mjcf import object_mjcf
+
+PROCEDURAL = ["proc_box", "proc_cylinder", "proc_sphere", "proc_l", "proc_mug"]
+YCB = os.environ.get("HSQ_YCB_DIR")
+needs_ycb = pytest.mark.skipif(not YCB or not Path(YCB).is_dir(), reason="HSQ_YCB_DIR is not set")
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path, monkeypatch) -> Path:
+    monkeypatch.setenv("HSQ_CACHE_DIR", str(tmp_path / "cache"))
+    return tmp_path / "cache"
+
+
+@pytest.fixture
+def fast_config():
+    config = load_assets_config()
+    coacd = dataclasses.replace(
+        config.coacd, preprocess_resolution=20, resolution=500, mcts_iterations=20, mcts_nodes=10
+    )
+    return dataclasses.replace(config, coacd=coacd)
+
+
+def test_procedural_objects_are_always_known(monkeypatch):
+    monkeypatch.delenv("HSQ_YCB_DIR", raising=False)
+    assert object_names() == PROCEDURAL
+    assert object_names("procedural") == PROCEDURAL
+    assert object_names("ycb") == []
+
+
+@needs_ycb
+def test_ycb_names_come_first_in_csv_order():
+    names = ycb_names()
+    assert len(names) == 15
+    assert names[0] == "cracker_box" and names[-1] == "rubiks_cube"
+    assert object_names() == [*names, *PROCEDURAL]
+    assert object_names("ycb") == names
+
+
+def test_unknown_source_and_name_list_the_known_ones():
+    with pytest.raises(ValueError, match="unknown source 'shapenet'"):
+        object_names("shapenet")
+    with pytest.raises(UnknownObjectError, match=r"known objects: .*proc_box.*proc_mug"):
+        get_object("teapot")
+
+
+def test_ycb_name_without_ycb_dir_explains_how_to_get_the_meshes(monkeypatch):
+    monkeypatch.delenv("HSQ_YCB_DIR", raising=False)
+    with pytest.raises(
+        UnknownObjectError, match=r"'mug' is a YCB object.*hsqbench assets download"
+    ):
+        get_object("mug")
+
+
+def test_get_object_without_build_says_how_to_build(fast_config):
+    with pytest.raises(FileNotFoundError, match="hsqbench assets build proc_box"):
+        get_object("proc_box", build=False, config=fast_config)
+    assert not is_built("proc_box", fast_config)
+    built = get_object("proc_box", config=fast_config)
+    assert is_built("proc_box", fast_config)
+    again = get_object("proc_box", build=False, config=fast_config)
+    assert again.build_dir == built.build_dir
+    assert built.source == "procedural" and built.texture is None
+    np.testing.assert_allclose(built.extents, [0.05, 0.07, 0.10])
+    assert built.mass_kg == pytest.approx(400.0 * 0.05 * 0.07 * 0.10)
+
+
+def test_parallel_build_gives_the_same_assets_as_a_serial_one(fast_config, cache, monkeypatch):
+    names = ["proc_l", "proc_cylinder"]
+    parallel = build_objects(names, jobs=2, config=fast_config, progress=False)
+    assert [a.name for a in parallel] == names
+    monkeypatch.setenv("HSQ_CACHE_DIR", str(cache.parent / "serial"))
+    serial = build_objects(names, jobs=1, config=fast_config, progress=False)
+    for p, s in zip(parallel, serial, strict=True):
+        assert p.build_dir.name == s.build_dir.name  # same cache key
+        np.testing.assert_allclose(p.inertia, s.inertia)
+        assert len(p.collision_meshes) == len(s.collision_meshes)
+        for a, b in zip(p.collision_meshes, s.collision_meshes, strict=True):
+            assert a.read_text() == b.read_text()  # seeded CoACD: identical hulls
+
+
+@needs_ycb
+def test_cracker_box_builds_textured_in_its_object_frame(fast_config):
+    asset = get_object("cracker_box", config=fast_config)
+    assert asset.source == "ycb"
+    assert asset.mass_kg == pytest.approx(0.411)
+    assert asset.texture is not None
+    with Image.open(asset.texture) as image:
+        assert image.size[0] >= 256
+    visual = trimesh.load(asset.visual_mesh, force="mesh", process=False)
+    assert len(visual.visual.uv) == len(visual.vertices)
+    lo, hi = visual.bounds
+    assert lo[2] == pytest.approx(0.0, abs=1e-9)
+    np.testing.assert_allclose((lo[:2] + hi[:2]) / 2, 0.0, atol=1e-9)
+    np.testing.assert_allclose(asset.extents, hi - lo, atol=1e-9)
+    # A full box of uniform density: COM near the middle, principal moments of a 7 x 16 x 21 cm box.
+    np.testing.assert_allclose(asset.com, [0, 0, asset.extents[2] / 2], atol=0.01)
+    a, b, c = asset.extents
+    box = asset.mass_kg / 12 * np.array([b**2 + c**2, a**2 + c**2, a**2 + b**2])
+    np.testing.assert_allclose(np.sort(np.linalg.eigvalsh(asset.inertia)), np.sort(box), rtol=0.15)
+    model = mujoco.MjModel.from_xml_string(object_mjcf(asset))
+    assert model.ntex == 1 and model.nmesh == 1 + len(asset.collision_meshes)
+
+
+@pytest.mark.slow
+@needs_ycb
+def test_every_ycb_object_builds_and_compiles():
+    """The full library with the project parameters (minutes; cached under HSQ_CACHE_DIR)."""
+    assets = build_objects(ycb_names(), progress=False)
+    for asset in assets:
+        assert 1 <= len(asset.collision_meshes) <= load_assets_config().coacd.max_convex_hull
+        assert asset.info["collision_method"] == "coacd", asset.name
+        model = mujoco.MjModel.from_xml_string(object_mjcf(asset))
+        assert model.body(asset.name).mass[0] == pytest.approx(asset.mass_kg)

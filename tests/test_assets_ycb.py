@@ -1,0 +1,72 @@
+"""The YCB source: objects.csv and the 15 meshes of HSQ_YCB_DIR (hsqbench.assets.ycb).
+
+Nothing here runs CoACD on a YCB mesh except the one small build (cracker box, about 3 s) and
+the slow test that builds the whole set.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from hsqbench.assets.config import load_assets_config
+from hsqbench.assets.ycb import read_objects_csv, ycb_entries
+from hsqbench.settings import SettingError
+
+YCB = os.environ.get("HSQ_YCB_DIR")
+needs_ycb = pytest.mark.skipif(not YCB or not Path(YCB).is_dir(), reason="HSQ_YCB_DIR is not set")
+
+
+@needs_ycb
+def test_lists_the_15_objects_in_csv_order_with_the_configured_masses():
+    entries = ycb_entries()
+    configured = load_assets_config().download.objects
+    assert [e.name for e in entries] == [o.name for o in configured]
+    assert [e.ycb_id for e in entries] == [o.ycb_id for o in configured]
+    np.testing.assert_allclose([e.mass_kg for e in entries], [o.mass_kg for o in configured])
+
+
+@needs_ycb
+@pytest.mark.parametrize("entry", ycb_entries(required=False), ids=lambda e: e.name)
+def test_each_mesh_loads_in_metres_with_z_up_and_a_texture(entry):
+    mesh = trimesh.load(entry.mesh_path, force="mesh", process=False)
+    assert len(mesh.faces) > 1000
+    extents = mesh.extents
+    # Household objects between 2 cm and 40 cm: the file is in metres, not millimetres.
+    assert 0.02 < extents.max() < 0.4
+    # Canonical YCB frame: the object stands on (about) z = 0.
+    assert abs(mesh.bounds[0, 2]) < 0.01
+    assert entry.texture_path is not None
+    assert len(mesh.visual.uv) == len(mesh.vertices)
+
+
+def test_missing_folder_explains_both_ways_to_get_the_meshes(monkeypatch):
+    monkeypatch.delenv("HSQ_YCB_DIR", raising=False)
+    with pytest.raises(SettingError, match="HSQ_YCB_DIR is not set") as err:
+        ycb_entries()
+    assert "hsqbench assets download" in str(err.value)
+    assert ycb_entries(required=False) == []
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("name,mass_kg\nmug,0.1\n", r"missing column\(s\) \['ycb_id'\]"),
+        ("name,ycb_id,mass_kg\nmug,025,-1\n", "line 2"),
+        ("name,ycb_id,mass_kg\nmug,025,abc\n", "positive mass_kg"),
+        ("name,ycb_id,mass_kg\nmug,025,0.1\nmug,025,0.1\n", "duplicate"),
+    ],
+)
+def test_bad_objects_csv_names_the_problem(tmp_path, text, match):
+    (tmp_path / "objects.csv").write_text(text)
+    with pytest.raises(ValueError, match=match):
+        read_objects_csv(tmp_path)
+
+
+def test_missing_objects_csv_says_what_it_needs(tmp_path):
+    with pytest.raises(FileNotFoundError, match="name,ycb_id,mass_kg"):
+        read_objects_csv(tmp_path)
