@@ -64,8 +64,9 @@ class ObjectSpec:
         density_kg_m3: used when ``mass_kg`` is ``None``.
         rgba: colour when there is no texture.
         scale: multiplies the file's coordinates to get metres.
-        up: which axis of the file points up: ``z`` (as is), ``y``, ``x``, or ``stable`` (the most
-            probable resting pose of the convex hull, from trimesh).
+        up: which axis of the file points up: ``z`` (as is), ``y``, ``x``, or ``stable`` (rest
+            on the convex-hull face that puts the centre of mass lowest, among faces it can
+            stand on).
         procedural: the generator entry for procedural objects.
         sections: facet count of curved procedural shapes.
     """
@@ -224,15 +225,37 @@ def load_mesh(spec: ObjectSpec) -> _Loaded:
 
 
 def upright_transform(solid: trimesh.Trimesh, up: str) -> np.ndarray:
-    """4x4 rotation taking the mesh's ``up`` axis to +z (``stable``: most probable resting pose)."""
+    """4x4 rotation taking the mesh's ``up`` axis to +z (``stable``: lowest stable resting pose)."""
     if up == "z":
         return np.eye(4)
     if up == "y":  # +y -> +z, +z -> -y
         return trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0])
     if up == "x":  # +x -> +z
         return trimesh.transformations.rotation_matrix(-np.pi / 2, [0, 1, 0])
-    poses, probs = trimesh.poses.compute_stable_poses(solid)
-    return np.asarray(poses[int(np.argmax(probs))])
+    return _lowest_stable_rotation(solid)
+
+
+def _lowest_stable_rotation(solid: trimesh.Trimesh) -> np.ndarray:
+    """Rotation putting the mesh on the convex-hull face plane that holds its centre of mass lowest
+    among those it can rest on (the centre of mass projects inside that face). Uniform density."""
+    hull = solid.convex_hull
+    com = solid.center_mass if is_closed_oriented(solid) else hull.center_mass
+    normals = hull.face_normals
+    height = np.einsum("ij,ij->i", hull.triangles[:, 0], normals) - normals @ com
+    # Project the centre of mass on each face plane and test it against that triangle; coplanar
+    # triangles of one facet share a plane, so testing per triangle covers the whole facet.
+    foot = (
+        com
+        - (normals @ com - np.einsum("ij,ij->i", hull.triangles[:, 0], normals))[:, None] * normals
+    )
+    bary = trimesh.triangles.points_to_barycentric(hull.triangles, foot)
+    inside = (bary >= -1e-9).all(axis=1)
+    if not inside.any():  # cannot happen for a closed hull; keep the file's orientation
+        return np.eye(4)
+    best = np.flatnonzero(inside)[np.argmin(height[inside])]
+    rot = np.eye(4)
+    rot[:3, :3] = trimesh.geometry.align_vectors(normals[best], [0.0, 0.0, -1.0])[:3, :3]
+    return rot
 
 
 def frame_transform(solid: trimesh.Trimesh, up: str) -> np.ndarray:

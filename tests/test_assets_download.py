@@ -1,0 +1,194 @@
+"""YCB download against a local HTTP server on 127.0.0.1 (hsqbench.assets.download).
+
+The archives are built in the test from one shared YCB object, in a temporary folder; nothing
+contacts the internet.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import http.server
+import io
+import os
+import tarfile
+import threading
+from pathlib import Path
+
+import pytest
+
+from hsqbench.assets.config import DownloadConfig, YcbObject, load_assets_config
+from hsqbench.assets.download import DownloadError, archive_name, download_ycb, fetch
+from hsqbench.assets.ycb import read_objects_csv
+
+YCB = os.environ.get("HSQ_YCB_DIR")
+pytestmark = pytest.mark.skipif(not YCB or not Path(YCB).is_dir(), reason="HSQ_YCB_DIR is not set")
+SOURCE = "foam_brick"
+
+
+class _Handler(http.server.BaseHTTPRequestHandler):
+    """Serves ``server.files`` (name -> bytes), honours ``Range: bytes=N-``, logs requests."""
+
+    def do_GET(self):
+        name = self.path.rsplit("/", 1)[-1]
+        self.server.requests.append((name, self.headers.get("Range")))
+        body = self.server.files.get(name)
+        if body is None:
+            self.send_error(404, "Not Found")
+            return
+        start = 0
+        if self.headers.get("Range") and self.server.ranges:
+            start = int(self.headers["Range"].split("=")[1].rstrip("-"))
+            self.send_response(206)
+            self.send_header("Content-Range", f"bytes {start}-{len(body) - 1}/{len(body)}")
+        else:
+            self.send_response(200)
+        self.send_header("Content-Length", str(len(body) - start))
+        self.end_headers()
+        self.wfile.write(body[start:])
+
+    def log_message(self, *args):
+        pass
+
+
+@pytest.fixture
+def server():
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), _Handler)
+    httpd.files, httpd.requests, httpd.ranges = {}, [], True
+    thread = threading.Thread(target=httpd.serve_forever, daemon=True)
+    thread.start()
+    httpd.base_url = f"http://127.0.0.1:{httpd.server_address[1]}/data/google"
+    yield httpd
+    httpd.shutdown()
+    httpd.server_close()
+
+
+@pytest.fixture(scope="module")
+def archive() -> bytes:
+    """A .tgz laid out like the official one, made from the shared copy of SOURCE."""
+    obj = _object(SOURCE)
+    buffer = io.BytesIO()
+    with tarfile.open(fileobj=buffer, mode="w:gz", compresslevel=1) as tar:
+        for name in ("textured.obj", "textured.mtl", "texture_map.png"):
+            tar.add(Path(YCB) / SOURCE / name, arcname=f"{obj.ycb_id}_{SOURCE}/google_16k/{name}")
+        info = tarfile.TarInfo(f"{obj.ycb_id}_{SOURCE}/google_16k/kinbody.xml")  # extra, ignored
+        info.size = 3
+        tar.addfile(info, io.BytesIO(b"<x>"))
+    return buffer.getvalue()
+
+
+def _object(name: str) -> YcbObject:
+    return next(o for o in load_assets_config().download.objects if o.name == name)
+
+
+def _config(**kwargs) -> DownloadConfig:
+    return dataclasses.replace(load_assets_config().download, **kwargs)
+
+
+def test_download_writes_the_ycb_layout(tmp_path, server, archive):
+    server.files[archive_name(_object(SOURCE))] = archive
+    report = download_ycb(tmp_path, _config(), [SOURCE], base_url=server.base_url, progress=False)
+    assert report.downloaded == [SOURCE] and not report.failed
+    entries = read_objects_csv(tmp_path)
+    assert [(e.name, e.ycb_id, e.mass_kg) for e in entries] == [(SOURCE, "061", 0.028)]
+    for name in ("textured.obj", "textured.mtl", "texture_map.png"):
+        assert (tmp_path / SOURCE / name).read_bytes() == (Path(YCB) / SOURCE / name).read_bytes()
+    assert not (tmp_path / SOURCE / "kinbody.xml").exists()
+    assert "CC BY 4.0" in (tmp_path / "ATTRIBUTION.md").read_text()
+    assert not (tmp_path / ".download").exists()  # archive removed, no partial files left
+    # Objects already present are skipped without a request.
+    server.requests.clear()
+    again = download_ycb(tmp_path, _config(), [SOURCE], base_url=server.base_url, progress=False)
+    assert again.skipped == [SOURCE] and server.requests == []
+
+
+def test_missing_archive_reports_the_http_status_and_url(tmp_path, server):
+    report = download_ycb(tmp_path, _config(), ["mug"], base_url=server.base_url, progress=False)
+    assert "HTTP 404" in report.failed["mug"]
+    assert "025_mug_google_16k.tgz" in report.failed["mug"]
+    assert not (tmp_path / "mug").exists()
+    assert read_objects_csv(tmp_path) == []
+
+
+def test_corrupt_archive_is_rejected_and_removed(tmp_path, server):
+    server.files[archive_name(_object(SOURCE))] = os.urandom(20000)
+    report = download_ycb(tmp_path, _config(), [SOURCE], base_url=server.base_url, progress=False)
+    assert "not a valid .tgz" in report.failed[SOURCE]
+    assert not (tmp_path / SOURCE).exists()
+    assert not any((tmp_path / ".download").glob("*"))  # fetched again on the next run
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".tmp")]
+
+
+def test_archive_without_the_mesh_is_rejected(tmp_path, server):
+    buffer = io.BytesIO()
+    with tarfile.open(fileobj=buffer, mode="w:gz") as tar:
+        data = os.urandom(20000)
+        info = tarfile.TarInfo("061_foam_brick/google_16k/texture_map.png")
+        info.size = len(data)
+        tar.addfile(info, io.BytesIO(data))
+    server.files[archive_name(_object(SOURCE))] = buffer.getvalue()
+    report = download_ycb(tmp_path, _config(), [SOURCE], base_url=server.base_url, progress=False)
+    assert "textured.obj" in report.failed[SOURCE]
+
+
+def test_configured_sha256_is_checked(tmp_path, server, archive):
+    server.files[archive_name(_object(SOURCE))] = archive
+    wrong = _config(sha256={SOURCE: "0" * 64})
+    report = download_ycb(tmp_path, wrong, [SOURCE], base_url=server.base_url, progress=False)
+    assert "sha256" in report.failed[SOURCE]
+    right = _config(sha256={SOURCE: hashlib.sha256(archive).hexdigest()})
+    report = download_ycb(tmp_path, right, [SOURCE], base_url=server.base_url, progress=False)
+    assert report.downloaded == [SOURCE]
+
+
+def test_too_small_answer_is_not_taken_for_an_archive(tmp_path, server):
+    server.files[archive_name(_object(SOURCE))] = b"<html>moved</html>"
+    report = download_ycb(tmp_path, _config(), [SOURCE], base_url=server.base_url, progress=False)
+    assert "only 18 bytes" in report.failed[SOURCE]
+
+
+def test_interrupted_download_resumes_with_a_range_request(tmp_path, server, archive):
+    target = tmp_path / "a.tgz"
+    server.files["a.tgz"] = archive
+    half = len(archive) // 2
+    (tmp_path / "a.tgz.part").write_bytes(archive[:half])
+    fetch(f"{server.base_url}/a.tgz", target, _config(), None, progress=False)
+    assert server.requests == [("a.tgz", f"bytes={half}-")]
+    assert target.read_bytes() == archive
+    assert not (tmp_path / "a.tgz.part").exists()
+
+
+def test_server_without_ranges_restarts_from_zero(tmp_path, server, archive):
+    server.ranges = False
+    server.files["a.tgz"] = archive
+    (tmp_path / "a.tgz.part").write_bytes(b"stale bytes")
+    fetch(f"{server.base_url}/a.tgz", tmp_path / "a.tgz", _config(), None, progress=False)
+    assert (tmp_path / "a.tgz").read_bytes() == archive
+
+
+def test_unreachable_server_names_the_url(tmp_path, server):
+    url = server.base_url
+    server.shutdown()
+    server.server_close()
+    with pytest.raises(DownloadError, match=r"cannot reach http://127\.0\.0\.1"):
+        fetch(f"{url}/a.tgz", tmp_path / "a.tgz", _config(timeout_s=5.0), None, progress=False)
+
+
+def test_unknown_object_lists_the_known_ones(tmp_path):
+    with pytest.raises(
+        ValueError, match=r"unknown YCB object\(s\) \['teapot'\]; known: cracker_box"
+    ):
+        download_ycb(tmp_path, _config(), ["teapot"], base_url="http://127.0.0.1:9", progress=False)
+
+
+def test_downloaded_folder_works_as_hsq_ycb_dir(tmp_path, server, archive, monkeypatch):
+    from hsqbench.assets.library import object_names, object_spec
+
+    server.files[archive_name(_object(SOURCE))] = archive
+    download_ycb(tmp_path / "ycb", _config(), [SOURCE], base_url=server.base_url, progress=False)
+    monkeypatch.setenv("HSQ_YCB_DIR", str(tmp_path / "ycb"))
+    monkeypatch.setenv("HSQ_CACHE_DIR", str(tmp_path / "cache"))
+    assert object_names("ycb") == [SOURCE]
+    spec = object_spec(SOURCE)
+    assert spec.mass_kg == pytest.approx(0.028)
+    assert spec.mesh_path == (tmp_path / "ycb" / SOURCE / "textured.obj").resolve()
