@@ -15,6 +15,7 @@ help:
 	@echo "make test        run the test suite (fast checks, as CI does)"
 	@echo "make test-slow   run the slow checks too (all 15 YCB objects, long fits)"
 	@echo "make bench       time the planner and the trial loop (bench/)"
+	@echo "make assets      build the object library (YCB from HSQ_YCB_DIR, procedural, imported)"
 	@echo "make lint        ruff"
 
 # The venv is (re)built when it is missing or when pyproject.toml changed since the last install.
@@ -43,7 +44,11 @@ format: $(STAMP)
 bench: $(STAMP)
 	@for f in bench/bench_*.py; do echo "== $$f"; $(PY) $$f || exit 1; done
 
-benchmark: $(STAMP)
+# Build the object library once (CoACD hulls, inertia, MuJoCo meshes; cached in HSQ_CACHE_DIR).
+assets: $(STAMP)
+	$(PY) -m hsqbench.cli assets build --jobs $(JOBS)
+
+benchmark: $(STAMP) assets
 	@echo "make benchmark: the benchmark runner is not built yet (see issue 7); nothing was run." >&2
 	@exit 2
 
