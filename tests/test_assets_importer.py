@@ -127,6 +127,8 @@ def test_cli_errors_are_clear(capsys, tmp_path):
     assert "is not a folder of meshes" in capsys.readouterr().err
     assert main(["assets", "import", str(tmp_path), "--density", "-1"]) == 2
     assert "--density must be > 0" in capsys.readouterr().err
+    assert main(["assets", "build", "--source", "ycb"]) == 2
+    assert "HSQ_YCB_DIR is not set" in capsys.readouterr().err
 
 
 def test_cli_list_shows_mass_before_building(capsys):
@@ -134,3 +136,4 @@ def test_cli_list_shows_mass_before_building(capsys):
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("proc_box"))
     assert row.split() == ["proc_box", "procedural", "-", "-", "-", "no"]
+    assert "no YCB objects: HSQ_YCB_DIR is not set" in out

@@ -82,6 +82,10 @@ def run(args: argparse.Namespace) -> int:
 
     config = load_assets_config(args.config)
     action = args.assets_command
+    if getattr(args, "source", None) == "ycb":
+        from hsqbench.settings import ycb_dir
+
+        ycb_dir(required=True)  # explains how to get the meshes when HSQ_YCB_DIR is unset
     if action == "list":
         return _list(config, args.source)
     if action == "build":
@@ -94,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
 def _list(config, source: str | None) -> int:
     from hsqbench.assets.build import load_cached
     from hsqbench.assets.library import object_names, object_spec
-    from hsqbench.settings import cache_dir
+    from hsqbench.settings import cache_dir, ycb_dir
 
     names = object_names(source, config)
     rows = [("name", "source", "mass_kg", "size_mm (x y z)", "hulls", "built")]
@@ -117,6 +121,8 @@ def _list(config, source: str | None) -> int:
         print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
     built = sum(r[-1] == "yes" for r in rows[1:])
     print(f"{len(names)} objects, {built} built (cache: {cache_dir()})")
+    if source in (None, "ycb") and ycb_dir(required=False) is None:
+        print("no YCB objects: HSQ_YCB_DIR is not set (see `hsqbench assets download --help`)")
     return 0
 
 
