@@ -20,6 +20,7 @@ from hsqbench.assets.build import (
     build_object,
     cache_key,
     clean_hulls,
+    drop_fins,
     is_closed_oriented,
     mass_properties,
 )
@@ -89,6 +90,19 @@ def test_non_manifold_but_closed_surface_counts_as_closed():
     both.merge_vertices()
     assert not both.is_watertight
     assert is_closed_oriented(both)
+
+
+def test_dangling_fin_faces_are_dropped_to_close_the_surface():
+    box = trimesh.creation.box(extents=(1, 1, 1))
+    a, b = box.faces[0][:2]
+    fin_tip = box.vertices[[a, b]].mean(axis=0) + np.array([0.0, 0.0, 5.0])
+    vertices = np.vstack([box.vertices, fin_tip])
+    faces = np.vstack([box.faces, [a, b, len(box.vertices)]])
+    finned = trimesh.Trimesh(vertices, faces, process=False)
+    assert not is_closed_oriented(finned)
+    fixed = drop_fins(finned)
+    assert is_closed_oriented(fixed)
+    assert len(fixed.faces) == 12 and fixed.volume == pytest.approx(1.0)
 
 
 def test_clean_hulls_merges_slivers_and_drops_nothing_solid():

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from hsqbench.assets.build import ObjectSpec, is_closed_oriented, load_mesh
 from hsqbench.assets.config import load_assets_config
 from hsqbench.assets.ycb import read_objects_csv, ycb_entries
 from hsqbench.settings import SettingError
@@ -42,6 +43,14 @@ def test_each_mesh_loads_in_metres_with_z_up_and_a_texture(entry):
     assert abs(mesh.bounds[0, 2]) < 0.01
     assert entry.texture_path is not None
     assert len(mesh.visual.uv) == len(mesh.vertices)
+    # After cleaning, the solid is closed, so the inertia comes from the mesh, not a fallback.
+    spec = ObjectSpec(
+        name=entry.name, source="ycb", mesh_path=entry.mesh_path, mass_kg=entry.mass_kg
+    )
+    loaded = load_mesh(spec)
+    assert is_closed_oriented(loaded.solid)
+    assert loaded.solid.volume == pytest.approx(mesh.volume, rel=1e-3)
+    assert loaded.texture_file == entry.texture_path
 
 
 def test_missing_folder_explains_both_ways_to_get_the_meshes(monkeypatch):

@@ -3,7 +3,8 @@
 Pipeline (``build_object``):
 
 1. Load the mesh and clean it: merge duplicate vertices (keeping texture seams in the visual
-   mesh), drop degenerate and duplicate faces and unreferenced vertices. Scale by ``spec.scale``
+   mesh), drop degenerate and duplicate faces and unreferenced vertices; in the solid used for
+   mass properties and CoACD, also drop dangling "fin" faces (see ``drop_fins``). Scale by ``spec.scale``
    (YCB google_16k scans are already in metres).
 2. Pose: rotate the ``spec.up`` axis to +z (YCB: already z up, no rotation), then translate so the
    lowest point is on z = 0 and the bounding-box centre is on x = y = 0 (see ``asset.py``).
@@ -41,7 +42,7 @@ from hsqbench.assets.asset import META_NAME, ObjectAsset
 from hsqbench.assets.config import AssetsConfig, CoacdConfig, HullConfig, ProceduralObject
 
 # Bump when the build code changes its output, so old cache entries are not reused.
-BUILD_VERSION = 1
+BUILD_VERSION = 2
 UP_AXES = ("z", "y", "x", "stable")
 
 
@@ -183,6 +184,24 @@ def _clean(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     return mesh
 
 
+def drop_fins(mesh: trimesh.Trimesh, max_rounds: int = 3) -> trimesh.Trimesh:
+    """Remove dangling faces: faces with two or more edges that no other face shares.
+
+    Scans carry a few such flaps (a triangle hinged on an edge of a closed surface: that edge then
+    has three faces, the flap's other two edges one). Dropping them leaves a closed surface whose
+    volume integral is exact, instead of falling back to the convex hull for the inertia.
+    """
+    for _ in range(max_rounds):
+        edges = np.sort(mesh.edges, axis=1)
+        _, inverse, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+        lonely = (counts[inverse.ravel()] == 1).reshape(-1, 3).sum(axis=1)
+        if not (lonely >= 2).any():
+            break
+        mesh.update_faces(lonely < 2)
+        mesh.remove_unreferenced_vertices()
+    return mesh
+
+
 def load_mesh(spec: ObjectSpec) -> _Loaded:
     """Read and clean the source mesh; errors name the file."""
     if spec.procedural is not None:
@@ -215,7 +234,7 @@ def load_mesh(spec: ObjectSpec) -> _Loaded:
     visual = _clean(loaded)
     if texture_file is not None or texture_image is not None:
         uv = np.asarray(visual.visual.uv, float)
-    solid = _clean(trimesh.Trimesh(visual.vertices, visual.faces, process=False))
+    solid = drop_fins(_clean(trimesh.Trimesh(visual.vertices, visual.faces, process=False)))
     if len(solid.faces) < 4 or np.ptp(solid.vertices, axis=0).min() <= 0:
         raise AssetError(f"{path}: the mesh is flat or has fewer than 4 usable faces")
     return _Loaded(visual, solid, uv, texture_file, texture_image)
