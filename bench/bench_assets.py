@@ -34,17 +34,22 @@ def main() -> int:
         start = time.perf_counter()
         assets = build_objects(names, jobs=args.jobs, progress=False)
         wall = time.perf_counter() - start
-        print(f"{'object':22s} {'hulls':>5s} {'build_s':>8s} {'coacd_s':>8s}  inertia")
+        print(
+            f"{'object':22s} {'hulls':>5s} {'build_s':>8s} {'cpu_s':>8s} {'coacd_s':>8s}  inertia"
+        )
         for a in assets:
             info = a.info
             print(
                 f"{a.name:22s} {len(a.collision_meshes):5d} {info['build_s']:8.1f} "
+                f"{info['build_cpu_s']:8.1f} "
                 f"{info['coacd_s']:8.1f}  {info['inertia_method']}"
                 + ("" if info["collision_method"] == "coacd" else "  (convex-hull fallback)")
             )
         total = sum(a.info["build_s"] for a in assets)
+        cpu = sum(a.info["build_cpu_s"] for a in assets)
         print(
-            f"{len(assets)} objects: {wall:.1f} s wall with {args.jobs} job(s), {total:.1f} s summed"
+            f"{len(assets)} objects: {wall:.1f} s wall with {args.jobs} job(s); per-object "
+            f"times summed: {total:.1f} s wall, {cpu:.1f} s CPU"
         )
     return 0
 
