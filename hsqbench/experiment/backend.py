@@ -1,0 +1,199 @@
+"""How the runner runs one trial: a :class:`TrialBackend`, called inside a worker process.
+
+The default backend, :class:`SimBackend`, calls the MuJoCo trial runner
+(``hsqbench.sim.trial.run_isolated_trial`` / ``run_packed_round``), imported lazily in the
+worker. Tests inject a fake backend (:mod:`hsqbench.experiment.fake_backend`). A backend must be
+picklable (it is sent to worker processes) and deterministic for a given trial seed.
+
+:func:`execute_trial` wraps a call: any exception raised by the backend becomes an *error* record
+(an infrastructure failure, never a grasp outcome), so one bad trial cannot stop a run.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+from hsqbench.experiment.seeds import TrialSpec
+from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
+
+ERROR_DETAIL_CHARS = 600
+
+
+class TrialRunnerUnavailable(RuntimeError):
+    """The simulation trial runner cannot be imported: nothing can be run."""
+
+
+@runtime_checkable
+class TrialBackend(Protocol):
+    """Runs single trials. Implementations must be picklable and deterministic per seed."""
+
+    name: str
+
+    def fingerprint(self) -> dict[str, Any]:
+        """Settings that change results (hashed into the run's config hash)."""
+        ...
+
+    def check(self, planners: tuple[str, ...]) -> None:
+        """Fail early, in the parent, with a clear message when trials cannot run."""
+        ...
+
+    def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult: ...
+
+    def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult: ...
+
+
+@dataclass
+class TrialRun:
+    """What a worker sends back: the result, or the error that prevented it.
+
+    Attributes:
+        wall_s: wall-clock seconds of the whole trial in the worker.
+        worker: ``host:pid`` of the process that ran it.
+    """
+
+    spec: TrialSpec
+    result: TrialResult | RoundResult | None
+    error: str | None
+    wall_s: float
+    worker: str
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+    @classmethod
+    def failed(cls, spec: TrialSpec, error: str, wall_s: float = float("nan")) -> TrialRun:
+        return cls(spec, None, _one_line(error), wall_s, "")
+
+
+def _one_line(text: str) -> str:
+    text = " | ".join(part.strip() for part in text.strip().splitlines() if part.strip())
+    return text if len(text) <= ERROR_DETAIL_CHARS else text[: ERROR_DETAIL_CHARS - 3] + "..."
+
+
+def _check_result(spec: TrialSpec, result: Any) -> None:
+    """The backend must answer the question asked: the right type, trial and attempt records."""
+    want = TrialResult if spec.experiment == "isolated" else RoundResult
+    if not isinstance(result, want):
+        raise TypeError(f"backend returned {type(result).__name__}, expected {want.__name__}")
+    if result.seed != spec.seed or result.planner != spec.planner:
+        raise ValueError(
+            f"backend returned the result of another trial (seed {result.seed}, planner "
+            f"{result.planner!r}; expected seed {spec.seed}, planner {spec.planner!r})"
+        )
+    got_objects = (result.object,) if isinstance(result, TrialResult) else tuple(result.objects)
+    if got_objects != spec.objects:
+        raise ValueError(f"backend returned objects {got_objects}, expected {spec.objects}")
+    if not result.attempts:
+        raise ValueError("backend returned a trial without any attempt")
+    for a in result.attempts:
+        if not isinstance(a, Attempt) or not isinstance(a.outcome, Outcome):
+            raise TypeError(f"attempts must be Attempt records with an Outcome, got {a!r}")
+    if isinstance(result, RoundResult):
+        extra = set(result.objects_cleared) - set(result.objects)
+        if extra or len(set(result.objects_cleared)) != len(result.objects_cleared):
+            raise ValueError(f"objects_cleared {result.objects_cleared} is not a subset of objects")
+
+
+def execute_trial(backend: TrialBackend, spec: TrialSpec) -> TrialRun:
+    """Run one trial in this process; exceptions become an error record (KeyboardInterrupt and
+    SystemExit propagate so that a run can still be stopped)."""
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    start = time.perf_counter()
+    try:
+        if spec.experiment == "isolated":
+            result = backend.run_isolated(spec.objects[0], spec.seed, spec.planner)
+        else:
+            result = backend.run_packed(list(spec.objects), spec.seed, spec.planner)
+        _check_result(spec, result)
+    except Exception as exc:
+        frames = traceback.extract_tb(exc.__traceback__)
+        where = f" (at {frames[-1].filename}:{frames[-1].lineno})" if frames else ""
+        error = f"{type(exc).__name__}: {exc}{where}"
+        return TrialRun(spec, None, _one_line(error), time.perf_counter() - start, worker)
+    return TrialRun(spec, result, None, time.perf_counter() - start, worker)
+
+
+@dataclass
+class SimBackend:
+    """The MuJoCo trial runner of ``hsqbench.sim.trial``.
+
+    The trial module must provide ``TrialConfig`` (a config dataclass),
+    ``run_isolated_trial(object, seed, planner, config)`` and
+    ``run_packed_round(objects, seed, planner, config)``. The config is loaded once per process.
+    """
+
+    trial_config: str = "trial"
+    name: str = "sim"
+
+    def __post_init__(self) -> None:
+        self._config: Any = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"trial_config": self.trial_config, "name": self.name}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.trial_config = state["trial_config"]
+        self.name = state["name"]
+        self._config = None
+
+    @staticmethod
+    def _module() -> Any:
+        try:
+            from hsqbench.sim import trial
+        except ImportError as exc:
+            raise TrialRunnerUnavailable(
+                "the simulation trial runner (hsqbench.sim.trial) is not available "
+                f"({type(exc).__name__}: {exc}); no trial was run"
+            ) from exc
+        missing = [
+            n
+            for n in ("TrialConfig", "run_isolated_trial", "run_packed_round")
+            if not hasattr(trial, n)
+        ]
+        if missing:
+            raise TrialRunnerUnavailable(
+                f"hsqbench.sim.trial lacks {missing}: the trial runner is not complete; "
+                "no trial was run"
+            )
+        return trial
+
+    def _trial_config(self) -> Any:
+        if self._config is None:
+            from hsqbench.config import load_config
+
+            self._config = load_config(self._module().TrialConfig, self.trial_config)
+        return self._config
+
+    def fingerprint(self) -> dict[str, Any]:
+        from hsqbench.config import to_dict
+
+        out = {"backend": self.name, "trial_config": to_dict(self._trial_config())}
+        try:
+            from hsqbench.planner.config import load_planner_config
+        except ImportError:
+            return out
+        out["planner_config"] = to_dict(load_planner_config())
+        return out
+
+    def check(self, planners: tuple[str, ...]) -> None:
+        self._trial_config()
+        try:
+            from hsqbench.planner.registry import planner_names
+        except ImportError:
+            return  # the trial runner resolves names itself and reports unknown ones per trial
+        known = set(planner_names())
+        unknown = [p for p in planners if p not in known]
+        if unknown:
+            raise ValueError(f"unknown planner(s) {unknown}; known: {sorted(known)}")
+
+    def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult:
+        return self._module().run_isolated_trial(obj, seed, planner, self._trial_config())
+
+    def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult:
+        return self._module().run_packed_round(objects, seed, planner, self._trial_config())

@@ -1,0 +1,139 @@
+"""Benchmark protocol: ``configs/paper.yaml`` (and ``quick.yaml``) loaded into frozen dataclasses.
+
+An :class:`ExperimentConfig` says *what* is run (objects, attempts, rounds, planners, seeds);
+*how* one trial runs (scene, robot, stop rule of a packed round) belongs to the trial runner's
+own config, named here by ``trial_config`` and loaded by the simulation backend.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from hsqbench.config import ConfigError, load_config
+
+EXPERIMENTS = ("isolated", "packed")
+
+# The paper's 15 objects (YCB ids 003-077); the same names as ``HSQ_YCB_DIR/objects.csv``.
+YCB_OBJECTS = (
+    "cracker_box",
+    "sugar_box",
+    "tomato_soup_can",
+    "mustard_bottle",
+    "potted_meat_can",
+    "banana",
+    "apple",
+    "bleach_cleanser",
+    "bowl",
+    "mug",
+    "power_drill",
+    "phillips_screwdriver",
+    "hammer",
+    "foam_brick",
+    "rubiks_cube",
+)
+
+
+def _check_objects(objects: tuple[str, ...], where: str) -> None:
+    if not objects:
+        raise ConfigError(f"{where}: the object list is empty")
+    bad = [o for o in objects if not o.strip() or any(c in o for c in "/;,")]
+    if bad:
+        raise ConfigError(f"{where}: object names must be non-empty without '/', ';' or ',': {bad}")
+    dupes = sorted({o for o in objects if objects.count(o) > 1})
+    if dupes:
+        raise ConfigError(f"{where}: duplicate object(s) {dupes}")
+
+
+@dataclass(frozen=True)
+class IsolatedConfig:
+    """Isolated scenes: each object alone, ``attempts_per_object`` independent attempts.
+
+    Attributes:
+        enabled: run this experiment at all.
+        objects: object names, as the trial runner knows them.
+        attempts_per_object: trials per object and base seed, each at its own random upright pose.
+    """
+
+    enabled: bool = True
+    objects: tuple[str, ...] = YCB_OBJECTS
+    attempts_per_object: int = 10
+
+    def __post_init__(self) -> None:
+        _check_objects(self.objects, "isolated.objects")
+        if self.attempts_per_object < 1:
+            raise ConfigError(
+                f"isolated.attempts_per_object must be >= 1, got {self.attempts_per_object}"
+            )
+
+
+@dataclass(frozen=True)
+class PackedConfig:
+    """Packed scenes: ``rounds`` rounds, each of ``objects_per_round`` objects drawn from ``objects``.
+
+    A round is run whole by the trial runner (it stops when the table is empty or after two
+    consecutive failed attempts, the paper's rule).
+    """
+
+    enabled: bool = True
+    objects: tuple[str, ...] = YCB_OBJECTS
+    rounds: int = 15
+    objects_per_round: int = 5
+
+    def __post_init__(self) -> None:
+        _check_objects(self.objects, "packed.objects")
+        if self.rounds < 1:
+            raise ConfigError(f"packed.rounds must be >= 1, got {self.rounds}")
+        if not 1 <= self.objects_per_round <= len(self.objects):
+            raise ConfigError(
+                f"packed.objects_per_round must be between 1 and the {len(self.objects)} objects "
+                f"of packed.objects, got {self.objects_per_round}"
+            )
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """One benchmark protocol.
+
+    Attributes:
+        planners: planner names, resolved by the trial runner (``hsqbench.planner.get_planner``).
+        seeds: base seeds. Every trial's seed derives from (base seed, experiment, object, index)
+            (see :mod:`hsqbench.experiment.seeds`); more base seeds repeat the whole protocol on
+            fresh poses and narrow the confidence intervals.
+        trial_config: name (in ``configs/``) or path of the trial runner's config.
+        confidence: level of the Wilson intervals in the report, in (0, 1).
+        isolated, packed: the two experiments of the paper.
+    """
+
+    planners: tuple[str, ...] = ("hsq", "single-sq", "antipodal")
+    seeds: tuple[int, ...] = (0,)
+    trial_config: str = "trial"
+    confidence: float = 0.95
+    isolated: IsolatedConfig = field(default_factory=IsolatedConfig)
+    packed: PackedConfig = field(default_factory=PackedConfig)
+
+    def __post_init__(self) -> None:
+        if not self.planners:
+            raise ConfigError("planners: list at least one planner")
+        dupes = sorted({p for p in self.planners if self.planners.count(p) > 1})
+        if dupes:
+            raise ConfigError(f"planners: duplicate planner(s) {dupes}")
+        bad = [p for p in self.planners if not p or "/" in p or "," in p or ";" in p]
+        if bad:
+            raise ConfigError(f"planners: names must be non-empty without '/', ',' or ';': {bad}")
+        if not self.seeds:
+            raise ConfigError("seeds: list at least one base seed, e.g. [0]")
+        if any(s < 0 for s in self.seeds) or len(set(self.seeds)) != len(self.seeds):
+            raise ConfigError(f"seeds: must be distinct non-negative integers, got {self.seeds}")
+        if not 0.0 < self.confidence < 1.0:
+            raise ConfigError(f"confidence must be in (0, 1), got {self.confidence}")
+        if not (self.isolated.enabled or self.packed.enabled):
+            raise ConfigError("both experiments are disabled: enable isolated or packed")
+
+    def enabled_experiments(self) -> tuple[str, ...]:
+        return tuple(e for e in EXPERIMENTS if getattr(self, e).enabled)
+
+
+def load_experiment_config(name_or_path: str | Path = "paper") -> ExperimentConfig:
+    """Load ``configs/<name>.yaml`` (``paper``, ``quick``) or a YAML path."""
+    return load_config(ExperimentConfig, name_or_path)

@@ -1,0 +1,234 @@
+"""Run a protocol: build the trial list, skip what a run folder already holds, run the rest.
+
+The runner owns the run folder (``results/<run>/``): it checks that a resumed run has the same
+config hash, repairs the files after a kill (see :mod:`hsqbench.experiment.results`), records
+each trial as it finishes, and shows a progress bar with the running GSR per planner.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import socket
+import sys
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from hsqbench.config import config_hash, to_dict
+from hsqbench.experiment.backend import SimBackend, TrialBackend
+from hsqbench.experiment.config import ExperimentConfig
+from hsqbench.experiment.executor import Executor, SerialExecutor
+from hsqbench.experiment.results import (
+    ATTEMPTS_FILE,
+    RUN_FILE,
+    STATUS_ERROR,
+    STATUS_OK,
+    ResultsError,
+    ResultStore,
+)
+from hsqbench.experiment.seeds import build_trials
+from hsqbench.settings import code_version
+
+
+@dataclass(frozen=True)
+class RunIdentity:
+    """What a run's results depend on: the protocol and the backend's settings."""
+
+    config: ExperimentConfig
+    backend: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class RunSummary:
+    """What one invocation did. ``selected`` = skipped (already recorded) + ran."""
+
+    run_dir: Path
+    config_hash: str
+    selected: int
+    skipped: int
+    ran: int = 0
+    errors: int = 0
+    interrupted: bool = False
+
+
+class _Tally:
+    """Running GSR per planner (status ``ok`` attempts only) and the error count."""
+
+    def __init__(self) -> None:
+        self.success: dict[str, int] = {}
+        self.attempts: dict[str, int] = {}
+        self.errors = 0
+
+    def add(self, rows: Iterable[dict[str, str]]) -> None:
+        for row in rows:
+            if row["status"] == STATUS_ERROR:
+                self.errors += 1
+            elif row["status"] == STATUS_OK:
+                p = row["planner"]
+                self.attempts[p] = self.attempts.get(p, 0) + 1
+                self.success[p] = self.success.get(p, 0) + (row["success"] == "1")
+
+    def postfix(self) -> dict[str, str]:
+        out = {f"gsr[{p}]": f"{self.success[p] / n:.2f}" for p, n in self.attempts.items()}
+        if self.errors:
+            out["errors"] = str(self.errors)
+        return out
+
+
+def _now() -> str:
+    return datetime.now(UTC).isoformat(timespec="seconds")
+
+
+def _machine() -> dict[str, Any]:
+    return {
+        "host": socket.gethostname(),
+        "platform": platform.platform(),
+        "python": sys.version.split()[0],
+        "cpus": os.cpu_count(),
+    }
+
+
+def _move_aside(run_dir: Path) -> Path:
+    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+    target = run_dir.with_name(f"{run_dir.name}.replaced-{stamp}")
+    run_dir.rename(target)
+    return target
+
+
+def run_benchmark(
+    config: ExperimentConfig,
+    run_dir: str | Path,
+    *,
+    backend: TrialBackend | None = None,
+    executor: Executor | None = None,
+    planners: Iterable[str] | None = None,
+    experiments: Iterable[str] | None = None,
+    resume: bool = False,
+    force: bool = False,
+    retry_errors: bool = False,
+    progress: bool = True,
+    config_name: str = "",
+) -> RunSummary:
+    """Run (or resume) the trials of ``config`` into ``run_dir``.
+
+    Args:
+        backend: runs one trial; default :class:`SimBackend` (the MuJoCo trial runner).
+        executor: default in-process (:class:`SerialExecutor`).
+        planners, experiments: run only these (the config, and so the hash, is unchanged, so a
+            later ``resume`` can add the others to the same run).
+        resume: continue an existing run folder (a missing folder starts a new run).
+        force: move an existing run folder aside (``<name>.replaced-<UTC time>``) and start anew.
+        retry_errors: when resuming, run again the trials recorded as errors.
+
+    Raises:
+        ResultsError: the folder holds another config's run, or exists without ``resume``.
+        TrialRunnerUnavailable: the default backend cannot import the trial runner.
+        KeyboardInterrupt: re-raised after recording the interruption; rows written so far stay.
+    """
+    run_dir = Path(run_dir)
+    backend = backend if backend is not None else SimBackend(config.trial_config)
+    executor = executor if executor is not None else SerialExecutor()
+    specs = build_trials(config, planners, experiments)
+    selected_planners = tuple(dict.fromkeys(s.planner for s in specs))
+    backend.check(selected_planners)
+    fingerprint = backend.fingerprint()
+    chash = config_hash(RunIdentity(config, fingerprint))
+
+    store = ResultStore(run_dir)
+    meta = store.read_meta()
+    has_data = meta is not None or (run_dir / ATTEMPTS_FILE).exists()
+    if has_data and force:
+        moved = _move_aside(run_dir)
+        print(f"moved the previous run to {moved}", file=sys.stderr)
+        meta, has_data = None, False
+    if has_data and not resume:
+        raise ResultsError(
+            f"{run_dir} already holds a run: pass --resume to continue it, choose another "
+            "--run name, or --force to move it aside and start again"
+        )
+    if has_data and meta is None:
+        raise ResultsError(f"{run_dir} has results but no {RUN_FILE}: choose another --run name")
+    if meta is not None and meta.get("config_hash") != chash:
+        raise ResultsError(
+            f"{run_dir} was run with config hash {meta.get('config_hash')}, but this config "
+            f"(with its trial settings) hashes to {chash}: results of two configs must not mix. "
+            "Choose a new --run name, or --force to move the old run aside"
+        )
+
+    with store.locked():
+        version = code_version()
+        if meta is None:
+            meta = {
+                "run": run_dir.name,
+                "config_name": config_name,
+                "config_hash": chash,
+                "config": to_dict(config),
+                "backend": fingerprint,
+                "code_version": version,
+                "created_at": _now(),
+                "machine": _machine(),
+                "sessions": [],
+            }
+        kept = store.prepare(retry_errors=retry_errors)
+        done = store.done_keys
+        pending = [s for s in specs if s.key not in done]
+        summary = RunSummary(run_dir, chash, len(specs), len(specs) - len(pending))
+        session: dict[str, Any] = {
+            "started_at": _now(),
+            "code_version": version,
+            "host": socket.gethostname(),
+            "executor": executor.name,
+            "jobs": getattr(executor, "jobs", None),
+            "planners": list(selected_planners),
+            "experiments": sorted({s.experiment for s in specs}),
+            "trials_selected": summary.selected,
+            "trials_skipped": summary.skipped,
+            "status": "running",
+        }
+        meta["sessions"].append(session)
+        store.write_meta(meta)
+
+        tally = _Tally()
+        selected_keys = {s.key for s in specs}
+        tally.add(r for r in kept.attempts if r["trial_key"] in selected_keys)
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(
+                total=len(specs),
+                initial=summary.skipped,
+                desc=run_dir.name,
+                unit="trial",
+                dynamic_ncols=True,
+            )
+            bar.set_postfix(tally.postfix())
+        status = "failed"
+        try:
+            for trial_run in executor.run(backend, pending):
+                rows = store.append(trial_run, chash, version)
+                summary.ran += 1
+                summary.errors += not trial_run.ok
+                tally.add(rows)
+                if bar is not None:
+                    bar.set_postfix(tally.postfix(), refresh=False)
+                    bar.update(1)
+            status = "finished"
+        except KeyboardInterrupt:
+            summary.interrupted = True
+            status = "interrupted"
+            raise
+        finally:
+            if bar is not None:
+                bar.close()
+            session.update(
+                finished_at=_now(),
+                trials_run=summary.ran,
+                errors=summary.errors,
+                status=status,
+            )
+            store.write_meta(meta)
+    return summary

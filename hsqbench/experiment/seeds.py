@@ -1,0 +1,113 @@
+"""The trial list of a protocol, and each trial's seed.
+
+Seed derivation (documented contract; changing it changes every result):
+
+    seed = int.from_bytes(sha256(f"{base_seed}|{experiment}|{object}|{index}").digest()[:4], "big")
+           & 0x7FFFFFFF
+
+- isolated trial ``index`` (0-based) of ``object``: ``object`` is the object name;
+- packed round ``index``: ``object`` is ``"round"``; the round's objects are drawn, without
+  replacement and listed in the order of ``packed.objects``, by
+  ``np.random.default_rng(derive_seed(base_seed, "packed", "draw", index))``.
+
+The planner is deliberately *not* part of the seed: every planner meets the same poses and the
+same rounds, so planners are compared on paired trials. Seeds are 31-bit so that any consumer
+(NumPy, MuJoCo, int32 fields) accepts them. A trial's identity is its :attr:`TrialSpec.key`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from hsqbench.experiment.config import EXPERIMENTS, ExperimentConfig
+
+Experiment = Literal["isolated", "packed"]
+
+
+def derive_seed(base_seed: int, experiment: str, obj: str, index: int) -> int:
+    """The 31-bit seed of one trial (see the module docstring)."""
+    if base_seed < 0 or index < 0:
+        raise ValueError(f"base_seed and index must be >= 0, got {base_seed}, {index}")
+    blob = f"{base_seed}|{experiment}|{obj}|{index}".encode()
+    return int.from_bytes(hashlib.sha256(blob).digest()[:4], "big") & 0x7FFFFFFF
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """One unit of work: an isolated trial (one object) or a packed round (several objects)."""
+
+    experiment: Experiment
+    planner: str
+    base_seed: int
+    index: int
+    objects: tuple[str, ...]
+    seed: int
+
+    @property
+    def key(self) -> str:
+        """Unique, stable identity of the trial within a run (used for resume and dedup)."""
+        if self.experiment == "isolated":
+            where = f"{self.objects[0]}/{self.index:03d}"
+        else:
+            where = f"round/{self.index:03d}"
+        return f"{self.experiment}/{self.planner}/s{self.base_seed}/{where}"
+
+
+def packed_round_objects(
+    pool: tuple[str, ...], per_round: int, base_seed: int, index: int
+) -> tuple[str, ...]:
+    """The objects of packed round ``index``: ``per_round`` distinct objects of ``pool``."""
+    rng = np.random.default_rng(derive_seed(base_seed, "packed", "draw", index))
+    chosen = np.sort(rng.choice(len(pool), size=per_round, replace=False))
+    return tuple(pool[i] for i in chosen)
+
+
+def build_trials(
+    config: ExperimentConfig,
+    planners: Iterable[str] | None = None,
+    experiments: Iterable[str] | None = None,
+) -> list[TrialSpec]:
+    """Every trial of ``config``, optionally restricted to some planners and experiments.
+
+    The order is deterministic: base seed, then trial, then planner, so that a partial run has
+    covered all planners on the same trials (paired data), and the packed rounds come after the
+    isolated trials of the same seed.
+
+    Raises:
+        ValueError: a requested planner or experiment is not in the config (or is disabled).
+    """
+    planners = tuple(config.planners if planners is None else planners)
+    unknown = [p for p in planners if p not in config.planners]
+    if unknown:
+        raise ValueError(
+            f"planner(s) {unknown} are not in this config's planners {list(config.planners)}; "
+            "add them to the config (a new config means a new run)"
+        )
+    enabled = config.enabled_experiments()
+    experiments = tuple(enabled if experiments is None else experiments)
+    for exp in experiments:
+        if exp not in EXPERIMENTS:
+            raise ValueError(f"unknown experiment {exp!r}; choose from {list(EXPERIMENTS)}")
+        if exp not in enabled:
+            raise ValueError(f"experiment {exp!r} is disabled in this config")
+
+    specs: list[TrialSpec] = []
+    for base in config.seeds:
+        if "isolated" in experiments:
+            iso = config.isolated
+            for obj in iso.objects:
+                for i in range(iso.attempts_per_object):
+                    seed = derive_seed(base, "isolated", obj, i)
+                    specs.extend(TrialSpec("isolated", p, base, i, (obj,), seed) for p in planners)
+        if "packed" in experiments:
+            pk = config.packed
+            for i in range(pk.rounds):
+                objs = packed_round_objects(pk.objects, pk.objects_per_round, base, i)
+                seed = derive_seed(base, "packed", "round", i)
+                specs.extend(TrialSpec("packed", p, base, i, objs, seed) for p in planners)
+    return specs
