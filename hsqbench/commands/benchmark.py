@@ -1,0 +1,130 @@
+"""``hsqbench benchmark``: run the paper's experiments (or any protocol config) into results/<run>/."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "run the isolated and packed experiments of a protocol config and write results/<run>/"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--config",
+        default="paper",
+        help="protocol: paper, quick, or a YAML path (default: paper)",
+    )
+    parser.add_argument(
+        "--run",
+        default=None,
+        metavar="NAME",
+        help="run name under results/ (or a folder path); default <config>-<UTC time>",
+    )
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        help="worker processes (default: the cores available; 1 runs in this process)",
+    )
+    parser.add_argument(
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
+    )
+    parser.add_argument(
+        "--planners", nargs="+", default=None, metavar="NAME", help="only these planners"
+    )
+    parser.add_argument(
+        "--experiments",
+        nargs="+",
+        choices=("isolated", "packed"),
+        default=None,
+        help="only these experiments",
+    )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the run --run NAME: finished trials are skipped (a new name starts a run)",
+    )
+    parser.add_argument(
+        "--retry-errors",
+        action="store_true",
+        help="with --resume, run again the trials that failed with an infrastructure error "
+        "(never failed grasps)",
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="move an existing run folder aside (<name>.replaced-<time>) and start again",
+    )
+    parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
+
+
+def _run_dir(run: str | None, config: str) -> Path:
+    from datetime import UTC, datetime
+
+    from hsqbench.settings import RESULTS_DIR
+
+    if run is None:
+        stem = Path(config).stem if config.endswith((".yaml", ".yml")) else config
+        return RESULTS_DIR / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}"
+    if "/" in run or run in (".", ".."):
+        return Path(run)
+    return RESULTS_DIR / run
+
+
+def run(args: argparse.Namespace) -> int:
+    import sys
+
+    from hsqbench.cli import CommandError
+    from hsqbench.experiment.backend import TrialRunnerUnavailable
+    from hsqbench.experiment.config import load_experiment_config
+    from hsqbench.experiment.executor import make_executor
+    from hsqbench.experiment.runner import run_benchmark
+
+    if args.retry_errors and not args.resume:
+        raise CommandError("--retry-errors only applies with --resume --run NAME")
+    if args.resume and args.run is None:
+        raise CommandError("--resume needs --run NAME (the run to continue)")
+    config = load_experiment_config(args.config)
+    run_dir = _run_dir(args.run, args.config)
+    executor = make_executor(args.executor, args.jobs)
+    try:
+        summary = run_benchmark(
+            config,
+            run_dir,
+            executor=executor,
+            planners=args.planners,
+            experiments=args.experiments,
+            resume=args.resume,
+            force=args.force,
+            retry_errors=args.retry_errors,
+            config_name=args.config,
+        )
+    except TrialRunnerUnavailable as exc:
+        raise CommandError(f"cannot run the benchmark: {exc}") from exc
+    except KeyboardInterrupt:
+        print(
+            f"\ninterrupted: finished trials are saved in {run_dir}; continue with\n"
+            f"  hsqbench benchmark --config {args.config} --run {run_dir} --resume",
+            file=sys.stderr,
+        )
+        return 130
+    print(
+        f"{run_dir}: {summary.selected} trials selected, {summary.skipped} already done, "
+        f"{summary.ran} run, {summary.errors} errors (config hash {summary.config_hash})"
+    )
+    if not args.no_report:
+        from hsqbench.experiment.report import write_report
+
+        written = write_report(run_dir)
+        print(f"report: {run_dir / 'tables.md'} (+{len(written) - 1} files)")
+    if summary.errors:
+        print(
+            f"{summary.errors} trial(s) failed with an infrastructure error (see the detail "
+            "column of attempts.csv); fix the cause and rerun them with --resume --retry-errors",
+            file=sys.stderr,
+        )
+        return 1
+    return 0

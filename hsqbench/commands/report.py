@@ -1,0 +1,22 @@
+"""``hsqbench report RUN_DIR``: tables and plots of a run, from its results files alone."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "write tables.md, table CSVs and PNG plots of a benchmark run from its results files"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("run_dir", type=Path, help="the run folder, e.g. results/paper-20250101")
+
+
+def run(args: argparse.Namespace) -> int:
+    from hsqbench.experiment.report import write_report
+
+    if not args.run_dir.is_dir():
+        raise FileNotFoundError(f"{args.run_dir} is not a folder; give results/<run>")
+    for path in write_report(args.run_dir):
+        print(path)
+    return 0
