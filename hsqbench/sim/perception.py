@@ -1,0 +1,537 @@
+"""Perception: the fused object cloud from the scene's two depth cameras.
+
+One observation (:meth:`Perception.observe`):
+
+1. **Render** each camera's planar depth offscreen (``mujoco.Renderer`` with depth rendering;
+   ``MUJOCO_GL=egl`` headless). Only the configured geom groups are drawn (visual geometry, not
+   the collision hulls) and no sites. Depth outside the camera's operating range is invalid (0).
+2. **Sensor errors** (``sensor_model`` in ``configs/perception.yaml``): ``none``; ``tof``
+   (range noise, flying pixels, dropout; :mod:`hsqbench.sim.sensor_noise`); ``calibration`` (a
+   fixed rigid error per camera, drawn when the :class:`Perception` is made); or both.
+3. **Back-project** the valid pixels with the intrinsics ``K`` and move them into the world with
+   the *believed* camera pose (the true pose composed with the calibration error, if any);
+   see :mod:`hsqbench.sim.camera` for the conventions.
+4. **Crop** each camera's points to the workspace box (grown by ``workspace_margin_m`` in x and
+   y, up to its top plus the margin) and remove the table: every point at most
+   ``table_margin_m`` above the support plane goes. With ``refit_table`` the plane is first
+   re-fitted to that camera's own points near the nominal table (least squares, trimmed): a
+   calibration error of 0.4 deg moves the table by several millimetres at 1 m, more than the
+   margin, and a real pipeline finds the table in its own data the same way.
+5. **Fuse and downsample**: the cameras' points are concatenated and replaced by voxel centroids
+   (``voxel_m``); a voxel's camera index is the camera that contributed most of its points.
+
+Robot links: the harness moves the arm out of view before perceiving; the workspace crop removes
+anything outside the box; with ``drop_robot_pixels`` a segmentation render per camera also
+removes pixels showing robot geoms (simulator ground truth, so off by default).
+
+All randomness comes from the generators passed in: the calibration errors from the one given to
+:class:`Perception` (drawn even when the model is off, so the noise stream does not depend on
+it), the depth noise from the one given to :meth:`Perception.observe`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hsqbench.config import load_config
+from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.sim.camera import (
+    backproject,
+    box_roi,
+    camera_intrinsics,
+    camera_pose,
+    crop_intrinsics,
+    transform_points,
+)
+from hsqbench.sim.sensor_noise import (
+    CalibrationErrorConfig,
+    TofNoiseConfig,
+    apply_tof_noise,
+    calibration_errors,
+)
+
+if TYPE_CHECKING:
+    from hsqbench.sim.scene import DepthCamera, SceneInfo
+
+Array = NDArray[np.float64]
+SensorModel = Literal["none", "tof", "calibration", "tof+calibration"]
+SENSOR_MODELS: tuple[str, ...] = ("none", "tof", "calibration", "tof+calibration")
+#: Pixels added around the crop box's image rectangle: the noise model's 3 x 3 neighbourhoods
+#: and central differences need one, and one more absorbs rounding.
+ROI_PAD_PX = 2
+
+
+@dataclass(frozen=True)
+class CropConfig:
+    """Workspace crop and table removal. Lengths in metres."""
+
+    workspace_margin_m: float = 0.02
+    table_margin_m: float = 0.005
+    refit_table: bool = True
+    refit_band_m: float = 0.015
+    refit_inlier_m: float = 0.004
+    refit_max_tilt_deg: float = 2.0
+    refit_min_points: int = 500
+
+    def __post_init__(self) -> None:
+        for name in ("workspace_margin_m", "table_margin_m", "refit_band_m", "refit_inlier_m"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0 metres, got {getattr(self, name)}")
+        if self.refit_min_points < 3:
+            raise ValueError(f"refit_min_points must be >= 3, got {self.refit_min_points}")
+
+
+@dataclass(frozen=True)
+class PerceptionConfig:
+    """``configs/perception.yaml``; see the comments there for every value's reason."""
+
+    sensor_model: SensorModel = "tof+calibration"
+    tof: TofNoiseConfig = field(default_factory=TofNoiseConfig)
+    calibration: CalibrationErrorConfig = field(default_factory=CalibrationErrorConfig)
+    crop: CropConfig = field(default_factory=CropConfig)
+    voxel_m: float = 0.002
+    geom_groups: tuple[int, ...] = (0, 1, 2)
+    drop_robot_pixels: bool = False
+
+    def __post_init__(self) -> None:
+        if self.sensor_model not in SENSOR_MODELS:
+            raise ValueError(f"sensor_model {self.sensor_model!r} is not one of {SENSOR_MODELS}")
+        if not self.voxel_m > 0:
+            raise ValueError(f"voxel_m must be positive metres, got {self.voxel_m}")
+        bad = [g for g in self.geom_groups if not 0 <= g < mujoco.mjNGROUP]
+        if bad:
+            raise ValueError(f"geom_groups {bad} outside 0..{mujoco.mjNGROUP - 1}")
+
+    @property
+    def tof_on(self) -> bool:
+        return "tof" in self.sensor_model
+
+    @property
+    def calibration_on(self) -> bool:
+        return "calibration" in self.sensor_model
+
+
+def load_perception_config(path: str | Path | None = "perception") -> PerceptionConfig:
+    """Load ``configs/perception.yaml`` (or another file); ``None`` gives the built-in defaults."""
+    return load_config(PerceptionConfig, path)
+
+
+# ---- results -----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CameraView:
+    """One camera's part of an observation.
+
+    Attributes:
+        name: MuJoCo camera name.
+        K: (3, 3) intrinsics, pixel centres at integer coordinates (see :mod:`hsqbench.sim.camera`).
+        width_px, height_px: image size.
+        T_world_camera: (4, 4) *believed* (calibrated) pose of the optical frame (x right, y down,
+            z forward) in the world; the cloud was back-projected with it.
+        T_world_camera_true: (4, 4) the camera's true pose (equal to the above without a
+            calibration error); for diagnostics only.
+        depth_m: (H, W) float32 measured planar depth, metres, 0 = invalid (after sensor errors,
+            range gating and robot masking); 0 outside ``roi``.
+        roi: ``(v0, v1, u0, u1)``: rows ``v0:v1`` and columns ``u0:u1`` were processed (the image
+            rectangle of the crop box).
+        table_plane: (4,) plane ``(a, b, c, d)`` (unit normal up) the table was removed with.
+        n_valid_px: valid pixels in ``depth_m``.
+        n_cropped: this camera's points left after the crop, before downsampling.
+    """
+
+    name: str
+    K: Array
+    width_px: int
+    height_px: int
+    T_world_camera: Array
+    T_world_camera_true: Array
+    depth_m: NDArray[np.float32]
+    roi: tuple[int, int, int, int]
+    table_plane: Array
+    n_valid_px: int
+    n_cropped: int
+
+    @property
+    def position(self) -> Array:
+        """(3,) believed optical centre in the world, metres."""
+        return self.T_world_camera[:3, 3]
+
+
+@dataclass(frozen=True)
+class PerceptionTimings:
+    """Wall-clock seconds of one observation, by step: rendering the clean depth images,
+    sensor errors, back-projection with cropping, fusion with downsampling, and all of it."""
+
+    render_s: float
+    noise_s: float
+    cloud_s: float
+    downsample_s: float
+    total_s: float
+
+
+@dataclass(frozen=True)
+class PerceivedCloud:
+    """A fused, cropped, downsampled object cloud and how it was made.
+
+    Attributes:
+        points: (N, 3) float64 world points, metres (N may be 0: nothing on the table).
+        camera_index: (N,) int64 index into ``cameras`` of each point's main contributor.
+        cameras: one :class:`CameraView` per camera, in the order of the scene's cameras.
+        support_plane: (4,) the nominal table plane ``(a, b, c, d)``, unit normal up.
+        workspace_min, workspace_max: (3,) corners of the crop box, metres.
+        sensor_model: the sensor model that produced it.
+        voxel_m: downsampling voxel size, metres.
+        timings: wall-clock seconds by step.
+    """
+
+    points: Array
+    camera_index: NDArray[np.int64]
+    cameras: tuple[CameraView, ...]
+    support_plane: Array
+    workspace_min: Array
+    workspace_max: Array
+    sensor_model: str
+    voxel_m: float
+    timings: PerceptionTimings
+
+    @property
+    def camera_positions(self) -> Array:
+        """(C, 3) believed camera centres, metres (``PlanningContext.camera_positions``)."""
+        return np.array([c.position for c in self.cameras])
+
+
+# ---- cropping ----------------------------------------------------------------------------------
+
+
+def validate_support_plane(plane: ArrayLike) -> Array:
+    """A (4,) plane with a unit normal; raises on a wrong shape, NaN or a zero normal."""
+    p = np.asarray(plane, dtype=np.float64).reshape(-1)
+    if p.shape != (4,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"support plane must be 4 finite numbers (a, b, c, d), got {plane!r}")
+    norm = np.linalg.norm(p[:3])
+    if norm < 1e-9:
+        raise ValueError(f"support plane {plane!r} has a zero normal")
+    return p / norm
+
+
+def fit_plane(points: Array, up: Array) -> Array:
+    """Least-squares plane (4,) through (N, 3) points (smallest-variance direction of their
+    covariance), normal oriented along ``up``."""
+    centre = points.mean(axis=0)
+    q = points - centre
+    _, vecs = np.linalg.eigh(np.einsum("ni,nj->ij", q, q))
+    n = vecs[:, 0] if vecs[:, 0] @ up >= 0 else -vecs[:, 0]
+    return np.array([*n, -n @ centre])
+
+
+def refit_table_plane(points: Array, nominal: Array, crop: CropConfig) -> Array:
+    """The table plane as seen in ``points`` (one camera's points over the workspace).
+
+    Points within ``refit_band_m`` of the nominal plane are fitted, then refitted twice on the
+    points within ``refit_inlier_m`` of the previous fit (this drops the object points in the
+    band). Falls back to ``nominal`` when too few points support the fit or the fit tilts more
+    than ``refit_max_tilt_deg`` from it.
+    """
+    band = np.abs(points @ nominal[:3] + nominal[3]) < crop.refit_band_m
+    if band.sum() < crop.refit_min_points:
+        return nominal
+    sample = points[band]
+    plane = fit_plane(sample, nominal[:3])
+    for _ in range(2):
+        inliers = np.abs(sample @ plane[:3] + plane[3]) < crop.refit_inlier_m
+        if inliers.sum() < crop.refit_min_points:
+            return nominal
+        plane = fit_plane(sample[inliers], nominal[:3])
+    tilt = np.rad2deg(np.arccos(np.clip(plane[:3] @ nominal[:3], -1.0, 1.0)))
+    return plane if tilt <= crop.refit_max_tilt_deg else nominal
+
+
+def workspace_mask(points: Array, lo: Array, hi: Array, margin_m: float) -> NDArray[np.bool_]:
+    """Points inside the box ``[lo, hi]`` grown by ``margin_m`` on every side, without a bottom:
+    below the box is the table, removed by its plane (points just under the nominal table top
+    are needed to re-fit it)."""
+    inside = np.all(points[:, :2] >= lo[:2] - margin_m, axis=1)
+    return inside & np.all(points <= hi + margin_m, axis=1)
+
+
+def fuse_and_downsample(clouds: Sequence[Array], voxel_m: float) -> tuple[Array, NDArray[np.int64]]:
+    """Voxel centroids of the union of ``clouds`` and, per voxel, the index of the cloud that
+    contributed most of its points (ties go to the lower index)."""
+    counts = [len(c) for c in clouds]
+    if sum(counts) == 0:
+        return np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
+    points = np.concatenate([c for c in clouds if len(c)])
+    source = np.repeat(np.arange(len(clouds)), counts)
+    down = voxel_downsample(points, voxel_m)
+    per = np.bincount(
+        down.inverse * len(clouds) + source, minlength=len(down.points) * len(clouds)
+    ).reshape(len(down.points), len(clouds))
+    return down.points, np.argmax(per, axis=1).astype(np.int64)
+
+
+# ---- the sensor --------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Camera:
+    name: str
+    cam_id: int
+    K: Array
+    width_px: int
+    height_px: int
+    min_range_m: float
+    max_range_m: float
+
+
+class Perception:
+    """The scene's depth cameras, rendering through renderers made once per model.
+
+    Create one per compiled model (renderers are bound to a model) and reuse it for every
+    observation of that scene; call :meth:`close` (or use ``with``) to free the GL resources.
+
+    Args:
+        model: the compiled scene.
+        cameras: the depth cameras (``SceneInfo.depth_cameras``: ``name``, ``min_range_m``,
+            ``max_range_m``; image size and field of view come from the model and must agree
+            with ``width_px``/``height_px``/``fovy_deg`` where those are given).
+        support_plane: (4,) nominal table plane ``(a, b, c, d)``, normal up.
+        workspace_min, workspace_max: (3,) corners of the region objects may occupy, metres.
+        config: perception settings; ``None`` loads ``configs/perception.yaml``.
+        rng: draws the per-camera calibration errors.
+        robot_geom_ids: geoms dropped by segmentation when ``config.drop_robot_pixels``.
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        cameras: Sequence[DepthCamera],
+        *,
+        support_plane: ArrayLike,
+        workspace_min: ArrayLike,
+        workspace_max: ArrayLike,
+        rng: np.random.Generator,
+        config: PerceptionConfig | None = None,
+        robot_geom_ids: ArrayLike | None = None,
+    ) -> None:
+        self.config = config if config is not None else load_perception_config()
+        self.model = model
+        if not cameras:
+            raise ValueError("Perception needs at least one depth camera")
+        self.support_plane = validate_support_plane(support_plane)
+        self.workspace_min = np.asarray(workspace_min, dtype=np.float64).reshape(3)
+        self.workspace_max = np.asarray(workspace_max, dtype=np.float64).reshape(3)
+        if not np.all(self.workspace_min < self.workspace_max):
+            raise ValueError(
+                f"workspace_min {self.workspace_min} must lie below workspace_max "
+                f"{self.workspace_max} on every axis"
+            )
+        self._cameras = tuple(self._resolve(model, c) for c in cameras)
+        errors = calibration_errors(len(self._cameras), self.config.calibration, rng)
+        #: (C, 4, 4) calibration error of each camera: believed pose = true pose @ error.
+        self.camera_errors = (
+            errors if self.config.calibration_on else np.tile(np.eye(4), (len(errors), 1, 1))
+        )
+        self._robot_geoms = np.unique(
+            np.asarray(robot_geom_ids if robot_geom_ids is not None else [], dtype=np.int64)
+        )
+        if self.config.drop_robot_pixels and robot_geom_ids is None:
+            raise ValueError(
+                "drop_robot_pixels needs robot_geom_ids (Perception.from_scene finds them)"
+            )
+
+        self._option = mujoco.MjvOption()
+        self._option.geomgroup[:] = 0
+        self._option.geomgroup[list(self.config.geom_groups)] = 1
+        self._option.sitegroup[:] = 0
+        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        try:
+            for cam in self._cameras:
+                size = (cam.height_px, cam.width_px)
+                if size not in self._renderers:
+                    self._renderers[size] = mujoco.Renderer(model, *size)
+        except Exception:
+            self.close()
+            raise
+
+    @classmethod
+    def from_scene(
+        cls,
+        model: mujoco.MjModel,
+        info: SceneInfo,
+        *,
+        rng: np.random.Generator,
+        config: PerceptionConfig | None = None,
+    ) -> Perception:
+        """A :class:`Perception` for a scene of :func:`hsqbench.sim.scene.build_scene`."""
+        prefix = info.robot_prefix
+        robot_bodies = [
+            b
+            for b in range(model.nbody)
+            if (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "").startswith(prefix)
+        ]
+        robot_geoms = np.flatnonzero(np.isin(model.geom_bodyid, robot_bodies))
+        return cls(
+            model,
+            info.depth_cameras,
+            support_plane=info.support_plane,
+            workspace_min=info.workspace_min,
+            workspace_max=info.workspace_max,
+            rng=rng,
+            config=config,
+            robot_geom_ids=robot_geoms,
+        )
+
+    @staticmethod
+    def _resolve(model: mujoco.MjModel, cam: DepthCamera) -> _Camera:
+        cam_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, cam.name)
+        if cam_id < 0:
+            known = [
+                mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, i) for i in range(model.ncam)
+            ]
+            raise ValueError(f"no camera {cam.name!r} in the model; cameras: {known}")
+        K, width, height = camera_intrinsics(model, cam_id)
+        expected = {
+            "width_px": width,
+            "height_px": height,
+            "fovy_deg": float(model.cam_fovy[cam_id]),
+        }
+        for attr, value in expected.items():
+            given = getattr(cam, attr, None)
+            if given is not None and not np.isclose(given, value):
+                raise ValueError(
+                    f"camera {cam.name!r}: {attr} = {given} in its description but {value} in "
+                    "the model; rebuild the scene from one config"
+                )
+        if not 0.0 <= cam.min_range_m < cam.max_range_m:
+            raise ValueError(
+                f"camera {cam.name!r}: need 0 <= min_range_m < max_range_m, got "
+                f"{cam.min_range_m}, {cam.max_range_m}"
+            )
+        return _Camera(cam.name, cam_id, K, width, height, cam.min_range_m, cam.max_range_m)
+
+    @property
+    def camera_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self._cameras)
+
+    def close(self) -> None:
+        """Free the renderers (idempotent)."""
+        for renderer in self._renderers.values():
+            renderer.close()
+        self._renderers = {}
+
+    def __enter__(self) -> Perception:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _renderer(self, cam: _Camera) -> mujoco.Renderer:
+        if not self._renderers:
+            raise RuntimeError("this Perception is closed; make a new one")
+        return self._renderers[(cam.height_px, cam.width_px)]
+
+    def render_depth(self, data: mujoco.MjData) -> list[NDArray[np.float32]]:
+        """Clean planar depth (H, W) of every camera, metres, 0 outside the operating range
+        (and on robot pixels with ``drop_robot_pixels``). ``data`` must be forward-consistent
+        (after ``mj_forward`` or ``mj_step``)."""
+        images = []
+        for cam in self._cameras:
+            renderer = self._renderer(cam)
+            renderer.update_scene(data, camera=cam.cam_id, scene_option=self._option)
+            renderer.enable_depth_rendering()
+            depth = renderer.render()
+            depth[(depth < cam.min_range_m) | (depth > cam.max_range_m)] = 0.0
+            if self.config.drop_robot_pixels:
+                renderer.enable_segmentation_rendering()
+                seg = renderer.render()
+                robot = (seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM) & np.isin(
+                    seg[..., 0], self._robot_geoms
+                )
+                depth[robot] = 0.0
+            images.append(depth)
+        return images
+
+    def observe(self, data: mujoco.MjData, rng: np.random.Generator) -> PerceivedCloud:
+        """One fused observation of the scene in ``data`` (see the module docstring).
+
+        Only each camera's region of interest (the image rectangle of the crop box, padded by
+        :data:`ROI_PAD_PX`) is processed: sensor errors, back-projection and cropping there;
+        ``CameraView.depth_m`` is 0 outside it.
+
+        Args:
+            data: the simulation state, forward-consistent; the arm should be out of view.
+            rng: draws the depth noise (unused with sensor models without ``tof``).
+        """
+        cfg = self.config
+        t0 = time.perf_counter()
+        clean = self.render_depth(data)
+        t_render = time.perf_counter() - t0
+        margin = cfg.crop.workspace_margin_m
+        below = max(cfg.crop.refit_band_m, cfg.crop.table_margin_m)
+        box_lo = self.workspace_min - np.array([margin, margin, below])
+        box_hi = self.workspace_max + margin
+        t_noise = t_cloud = 0.0
+        views, clouds = [], []
+        for i, (cam, full) in enumerate(zip(self._cameras, clean, strict=True)):
+            t = time.perf_counter()
+            true_pose = camera_pose(data, cam.cam_id)
+            pose = true_pose @ self.camera_errors[i]
+            roi = box_roi(pose, cam.K, cam.width_px, cam.height_px, box_lo, box_hi, ROI_PAD_PX)
+            v0, v1, u0, u1 = roi
+            K_roi = crop_intrinsics(cam.K, v0, u0)
+            depth = full[v0:v1, u0:u1]
+            if cfg.tof_on:
+                depth = apply_tof_noise(depth, K_roi, cfg.tof, rng).depth_m
+            t_noise += time.perf_counter() - t
+            t = time.perf_counter()
+            measured = np.zeros_like(full)
+            measured[v0:v1, u0:u1] = depth
+            valid = depth > 0
+            points = transform_points(pose, backproject(depth, K_roi)[valid])
+            points = points[workspace_mask(points, self.workspace_min, self.workspace_max, margin)]
+            plane = (
+                refit_table_plane(points, self.support_plane, cfg.crop)
+                if cfg.crop.refit_table
+                else self.support_plane
+            )
+            points = points[points @ plane[:3] + plane[3] > cfg.crop.table_margin_m]
+            clouds.append(points)
+            views.append(
+                CameraView(
+                    name=cam.name,
+                    K=cam.K.copy(),
+                    width_px=cam.width_px,
+                    height_px=cam.height_px,
+                    T_world_camera=pose,
+                    T_world_camera_true=true_pose,
+                    depth_m=measured,
+                    roi=roi,
+                    table_plane=plane,
+                    n_valid_px=int(valid.sum()),
+                    n_cropped=len(points),
+                )
+            )
+            t_cloud += time.perf_counter() - t
+        t = time.perf_counter()
+        fused, camera_index = fuse_and_downsample(clouds, cfg.voxel_m)
+        t_down = time.perf_counter() - t
+        return PerceivedCloud(
+            points=fused,
+            camera_index=camera_index,
+            cameras=tuple(views),
+            support_plane=self.support_plane.copy(),
+            workspace_min=self.workspace_min.copy(),
+            workspace_max=self.workspace_max.copy(),
+            sensor_model=cfg.sensor_model,
+            voxel_m=cfg.voxel_m,
+            timings=PerceptionTimings(t_render, t_noise, t_cloud, t_down, time.perf_counter() - t0),
+        )
