@@ -40,9 +40,10 @@ class GraspConfig:
     elimination_voxel_m: float = 0.003
     opening_margin_m: float = 0.004
     support_radius_m: float = 0.01
-    support_depth_m: float = 0.01
+    contact_depth_m: float = 0.01
     support_min_points: int = 5
     support_min_fraction: float = 0.25
+    support_max_tilt_deg: float = 30.0
     approach_distance_m: float = 0.05
     table_clearance_m: float = 0.003
     # Scoring.
@@ -59,7 +60,7 @@ class GraspConfig:
             "rotate_step_deg": self.rotate_step_deg,
             "elimination_voxel_m": self.elimination_voxel_m,
             "support_radius_m": self.support_radius_m,
-            "support_depth_m": self.support_depth_m,
+            "contact_depth_m": self.contact_depth_m,
             "q_alpha": self.q_alpha,
             "q_gamma": self.q_gamma,
             "q_delta": self.q_delta,
@@ -81,6 +82,7 @@ class GraspConfig:
             "opening_margin_m": self.opening_margin_m,
             "support_min_points": self.support_min_points,
             "support_min_fraction": self.support_min_fraction,
+            "support_max_tilt_deg": self.support_max_tilt_deg,
             "approach_distance_m": self.approach_distance_m,
             "table_clearance_m": self.table_clearance_m,
         }

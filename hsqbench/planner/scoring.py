@@ -33,9 +33,10 @@ FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")
 #: The raw measures behind the factors: alpha (m), beta, gamma (dimensionless), delta (m).
 MEASURE_NAMES = ("alpha_m", "beta", "gamma", "delta_m")
 
-#: Contact patch: rings at these fractions of ``contact_radius_m``, this many samples each.
-_RING_FRACTIONS = (0.5, 1.0)
-_RING_SAMPLES = 6
+#: Contact patch: rings at these fractions of ``contact_radius_m``, this many samples each
+#: (24 samples: a pad-sized patch, sampled about every 2 mm).
+_RING_FRACTIONS = (1 / 3, 2 / 3, 1.0)
+_RING_SAMPLES = 8
 
 
 def contact_curvature(
@@ -46,8 +47,8 @@ def contact_curvature(
 ) -> NDArray[np.float64]:
     """Mean Gaussian curvature (1/m^2) over the patch around the ``+d`` contact of lines ``index``.
 
-    Patch samples are where lines parallel to the closing line, offset by rings of radius
-    ``contact_radius_m / 2`` and ``contact_radius_m`` (capped at half the smallest semi-axis so
+    Patch samples are where lines parallel to the closing line, offset by rings of radius up to
+    ``contact_radius_m`` (capped at half the smallest semi-axis so
     the patch fits on thin parts), meet the surface: where the pads touch. Offsets that miss the
     surface (past an edge) are left out; a line with no sample on the surface gets +inf. The
     ``-d`` contact has the same curvature by symmetry.

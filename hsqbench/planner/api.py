@@ -1,0 +1,335 @@
+"""The planner interface the harness calls, and the paper's planner behind it.
+
+- :class:`PlanningContext`: what the harness knows besides the cloud (table plane, packed scene,
+  seed, cameras, workspace).
+- :class:`Planner`: the protocol every planner implements, ``plan(points, context)``; baselines
+  and users' planners plug in the same way (see :mod:`hsqbench.planner.registry`).
+- :class:`PlanResult`: ranked grasps plus everything needed to explain them.
+- :func:`plan_grasps`: the paper's two stages; :func:`plan_from_hidden` runs stage two alone on
+  given hidden superquadrics (for tests with known shapes, and for replaying stage one).
+
+Support plane convention: ``(a, b, c, d)`` with ``a x + b y + c z + d = 0`` and ``(a, b, c)`` the
+unit normal pointing to the free side (up, for a table).
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hsqbench.config import resolve_config_path
+from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet
+from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_config
+from hsqbench.planner.elimination import RULE_DESCRIPTIONS, eliminate
+from hsqbench.planner.grasp import Grasp
+from hsqbench.planner.gripper import GripperModel, load_gripper
+from hsqbench.planner.scoring import score_candidates
+from hsqbench.planner.synthesis import synthesize
+from hsqbench.superquadric import Superquadric, as_points
+
+
+def validate_cloud(points: ArrayLike) -> NDArray[np.float64]:
+    """The cloud as (N, 3) float64, or a ValueError naming the problem and the fix."""
+    try:
+        cloud = as_points(points)
+    except ValueError as exc:
+        raise ValueError(f"the point cloud must be an (N, 3) array of metres: {exc}") from None
+    if cloud.shape[0] == 0:
+        raise ValueError("the point cloud is empty; the planner needs the points of the object(s)")
+    finite = np.isfinite(cloud).all(axis=1)
+    if not finite.all():
+        bad = np.flatnonzero(~finite)
+        raise ValueError(
+            f"the point cloud has {bad.size} row(s) with NaN or inf (first at index {bad[0]}); "
+            "drop them first, e.g. points[np.isfinite(points).all(axis=1)]"
+        )
+    return cloud
+
+
+def validate_plane(plane: ArrayLike | None) -> NDArray[np.float64] | None:
+    """``(a, b, c, d)`` scaled so that ``(a, b, c)`` is a unit normal; ValueError if impossible."""
+    if plane is None:
+        return None
+    arr = np.asarray(plane, dtype=np.float64).reshape(-1)
+    if arr.shape != (4,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"support_plane must be 4 finite numbers (a, b, c, d), got {plane!r}")
+    norm = float(np.linalg.norm(arr[:3]))
+    if norm < 1e-9:
+        raise ValueError(f"support_plane normal (a, b, c) must not be zero, got {plane!r}")
+    return arr / norm
+
+
+@dataclass(frozen=True)
+class PlanningContext:
+    """What a planner may use besides the cloud.
+
+    Attributes:
+        support_plane: the table ``(a, b, c, d)`` (unit normal toward the free side), or None.
+        packed: several objects in the cloud (the paper then drops ``h_delta``).
+        seed: for any randomness in the planner; None means the planner's default.
+        camera_positions: (C, 3) camera centres, world metres, if known (the hsq planner ignores
+            them; view-aware planners may use them).
+        workspace_bounds: ``(lower (3,), upper (3,))`` corners of the workspace box, metres, if
+            known (ignored by the hsq planner).
+    """
+
+    support_plane: tuple[float, float, float, float] | None = None
+    packed: bool = False
+    seed: int | None = None
+    camera_positions: NDArray[np.float64] | None = None
+    workspace_bounds: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+
+    def __post_init__(self) -> None:
+        plane = validate_plane(self.support_plane)
+        if plane is not None:
+            object.__setattr__(self, "support_plane", tuple(float(x) for x in plane))
+
+
+@runtime_checkable
+class Planner(Protocol):
+    """Anything that turns a cloud into ranked grasps."""
+
+    name: str
+
+    def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult: ...
+
+
+@dataclass
+class PlanResult:
+    """The outcome of planning on one cloud.
+
+    Attributes:
+        grasps: surviving grasps, best first (ties, e.g. the rolls of one closing line, keep
+            candidate order); for the hsq planner a lazy :class:`RankedGrasps` sequence.
+        hidden_superquadrics: stage one's output (``HiddenSuperquadric`` objects), if any.
+        candidates: every candidate with ``rejected_by``, ``scores``, ``factors`` and
+            ``measures`` (None for planners without candidates).
+        remaining: candidates left after each step, in order: ``synthesised``, then one entry
+            per elimination rule (see :data:`~hsqbench.planner.candidates.REJECTION_REASONS`).
+        removed_by: how many candidates each rule removed.
+        timings: wall-clock seconds per stage (``recovery``, ``synthesis``, ``elimination``,
+            ``scoring``, ``total``).
+        reason: why no grasp survived, in words; ``""`` when there are grasps.
+        planner: the planner's name.
+    """
+
+    grasps: Sequence[Grasp]
+    hidden_superquadrics: list[Any] = field(default_factory=list)
+    candidates: CandidateSet | None = None
+    remaining: dict[str, int] = field(default_factory=dict)
+    removed_by: dict[str, int] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
+    reason: str = ""
+    planner: str = "hsq"
+
+    @property
+    def best(self) -> Grasp | None:
+        return self.grasps[0] if self.grasps else None
+
+    def to_dict(self, top: int | None = None) -> dict[str, Any]:
+        """JSON-ready summary: the ``top`` best grasps (all if None), counts, timings, reason."""
+        grasps = self.grasps if top is None else self.grasps[:top]
+        return {
+            "planner": self.planner,
+            "n_grasps": len(self.grasps),
+            "grasps": [g.to_dict() for g in grasps],
+            "hidden_superquadrics": [_hidden_to_dict(h) for h in self.hidden_superquadrics],
+            "remaining": dict(self.remaining),
+            "removed_by": dict(self.removed_by),
+            "timings": dict(self.timings),
+            "reason": self.reason,
+        }
+
+
+def _hidden_to_dict(hidden: Any) -> dict[str, Any]:
+    sq = hidden.superquadric
+    return {
+        "eps1": sq.eps1,
+        "eps2": sq.eps2,
+        "scale": sq.scale.tolist(),
+        "rotation": sq.rotation.tolist(),
+        "translation": sq.translation.tolist(),
+        "n_inliers": len(hidden.inliers),
+        "alpha": float(hidden.alpha),
+        "beta": float(hidden.beta),
+    }
+
+
+def resolve_config(config: PlannerConfig | str | Path | None) -> PlannerConfig:
+    """A :class:`PlannerConfig` from an instance, a config name or path; None -> planner.yaml.
+
+    Files are parsed once per modification time (planning many clouds re-reads nothing).
+    """
+    if isinstance(config, PlannerConfig):
+        return config
+    path = resolve_config_path("planner" if config is None else config)
+    return _load_cached(load_planner_config, str(path), path.stat().st_mtime_ns)
+
+
+def resolve_gripper(name_or_path: str | Path) -> GripperModel:
+    """The gripper of ``configs/<name>.yaml`` (or a YAML path), parsed once per modification."""
+    path = resolve_config_path(name_or_path)
+    return _load_cached(load_gripper, str(path), path.stat().st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=32)
+def _load_cached(loader: Any, path: str, mtime_ns: int) -> Any:
+    return loader(path)
+
+
+def _no_grasp_reason(
+    n_hidden: int, cands: CandidateSet, gripper: GripperModel, config: GraspConfig
+) -> str:
+    if n_hidden == 0:
+        return "stage one found no hidden superquadric in the cloud"
+    n_lines = len(cands.lines)
+    if n_lines == 0:
+        return f"the {n_hidden} hidden superquadric(s) gave no closing line"
+    counts = cands.counts_by_reason()
+    if counts["width"] == len(cands):
+        narrowest = 2.0 * float(np.min(cands.lines.half_lengths))
+        return (
+            f"all {n_lines} closing lines of the {n_hidden} hidden superquadric(s) are wider than "
+            f"the {gripper.max_opening_m:g} m opening (less a {config.opening_margin_m:g} m "
+            f"margin); the narrowest is {narrowest:.3f} m"
+        )
+    removed = ", ".join(
+        f"{reason} {counts[reason]}" for reason in REJECTION_REASONS if counts[reason]
+    )
+    last = next(r for r in reversed(REJECTION_REASONS) if counts[r])
+    return (
+        f"no candidate survived: of {len(cands)} candidates on {n_lines} closing lines, the rules "
+        f"removed {removed}; the last were removed by '{last}' ({RULE_DESCRIPTIONS[last]})"
+    )
+
+
+def plan_from_hidden(
+    points: ArrayLike,
+    hidden: Sequence[Any],
+    config: GraspConfig | None = None,
+    *,
+    gripper: GripperModel | None = None,
+    packed: bool = False,
+    support_plane: ArrayLike | None = None,
+    seed: int | None = None,
+) -> PlanResult:
+    """Stage two on given hidden superquadrics: synthesis, elimination, scoring, ranking.
+
+    Args:
+        points: (N, 3) cloud, metres (the whole cloud: collisions are checked against all of it).
+        hidden: objects with ``.superquadric`` (:class:`Superquadric`), ``.alpha`` (metres) and
+            ``.beta`` (fraction), e.g. ``HiddenSuperquadric`` from stage one.
+        config: stage-two settings; default: ``grasp:`` of ``configs/planner.yaml``.
+        gripper: default: ``configs/<config.gripper>.yaml``.
+        packed: leave ``h_delta`` out of the score.
+        support_plane: the table, ``(a, b, c, d)``; None: no table test.
+        seed: for the subset used to estimate the cloud's spacing (None = 0).
+    """
+    cloud = validate_cloud(points)
+    cfg = config if config is not None else resolve_config(None).grasp
+    grip = gripper if gripper is not None else resolve_gripper(cfg.gripper)
+    plane = validate_plane(support_plane)
+    superquadrics: list[Superquadric] = [h.superquadric for h in hidden]
+    timings: dict[str, float] = {}
+
+    start = time.perf_counter()
+    cands = synthesize(superquadrics, cfg)
+    timings["synthesis"] = time.perf_counter() - start
+
+    start = time.perf_counter()
+    report = eliminate(cands, cloud, grip, cfg, plane, 0 if seed is None else seed)
+    timings["elimination"] = time.perf_counter() - start
+
+    start = time.perf_counter()
+    alphas = np.array([h.alpha for h in hidden], dtype=np.float64)
+    betas = np.array([h.beta for h in hidden], dtype=np.float64)
+    score_candidates(cands, superquadrics, alphas, betas, cloud.mean(axis=0), packed, cfg)
+    grasps = cands.ranked()
+    timings["scoring"] = time.perf_counter() - start
+
+    counts = cands.counts_by_reason()
+    return PlanResult(
+        grasps=grasps,
+        hidden_superquadrics=list(hidden),
+        candidates=cands,
+        remaining=report.remaining,
+        removed_by={r: counts[r] for r in REJECTION_REASONS},
+        timings=timings,
+        reason="" if grasps else _no_grasp_reason(len(hidden), cands, grip, cfg),
+    )
+
+
+def plan_grasps(
+    points: ArrayLike,
+    config: PlannerConfig | str | Path | None = None,
+    *,
+    packed: bool = False,
+    support_plane: ArrayLike | None = None,
+    seed: int | None = None,
+    gripper: GripperModel | None = None,
+) -> PlanResult:
+    """The paper's planner: hidden superquadrics (stage one), then ranked grasps (stage two).
+
+    Args:
+        points: (N, 3) cloud of the object (or packed scene), world metres, table removed.
+        config: a :class:`PlannerConfig`, a config name or a YAML path; None: planner.yaml.
+        packed: a packed scene (``h_delta`` left out).
+        support_plane: the table ``(a, b, c, d)``, unit normal toward the free side.
+        seed: stage one's K-means seed (None = 0: deterministic by default).
+        gripper: default: the gripper named in the config.
+
+    Raises:
+        ValueError: an empty, non-finite or badly shaped cloud; a bad plane or config.
+    """
+    from hsqbench.planner.recovery import recover_hidden_superquadrics
+
+    start = time.perf_counter()
+    cloud = validate_cloud(points)
+    cfg = resolve_config(config)
+    hidden = recover_hidden_superquadrics(cloud, cfg.recovery, seed=seed)
+    t_recovery = time.perf_counter() - start
+    result = plan_from_hidden(
+        cloud,
+        hidden,
+        cfg.grasp,
+        gripper=gripper,
+        packed=packed,
+        support_plane=support_plane,
+        seed=seed,
+    )
+    result.timings = {"recovery": t_recovery, **result.timings}
+    result.timings["total"] = time.perf_counter() - start
+    return result
+
+
+class HSQPlanner:
+    """The paper's planner behind the :class:`Planner` protocol."""
+
+    name = "hsq"
+
+    def __init__(
+        self,
+        config: PlannerConfig | str | Path | None = None,
+        gripper: GripperModel | None = None,
+    ) -> None:
+        self.config = resolve_config(config)
+        self.gripper = (
+            gripper if gripper is not None else resolve_gripper(self.config.grasp.gripper)
+        )
+
+    def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
+        return plan_grasps(
+            points,
+            self.config,
+            packed=context.packed,
+            support_plane=context.support_plane,
+            seed=context.seed,
+            gripper=self.gripper,
+        )

@@ -1,0 +1,356 @@
+"""Candidate elimination (paper, stage two), plus the table and the hand's path.
+
+All rules look at the cloud voxel-downsampled at ``elimination_voxel_m`` (one centroid per
+occupied voxel): the cost then follows the object's surface area, not the sensor's density, and
+the centroids average out part of the noise. Rules, in order; a candidate carries the first rule
+that removed it (``CandidateSet.rejected_by``):
+
+1. ``width``: the contacts are farther apart than the opening allows,
+   ``2 h > l_w - opening_margin_m``.
+2. ``support`` (paper): a cylinder of radius ``support_radius_m`` around each contact, reaching
+   ``contact_depth_m`` both ways along the line (but not past ``P_G``), must hold at least
+   ``kappa`` cloud points, else every roll of the line goes. ``kappa`` is the larger of
+   ``support_min_points`` and ``support_min_fraction`` of the points a fully seen disc of that
+   radius holds at the (downsampled) cloud's spacing (median nearest-neighbour distance), so one
+   setting serves dense and sparse clouds. Addition: the points must also form a surface the
+   finger can push on, i.e. the normal of the plane fitted to them must be within
+   ``support_max_tilt_deg`` of the line. This removes lines whose contact is an edge of the
+   object (e.g. a superquadric fitted to one face of a box, gripped across that face's length).
+3. ``table``: with a support plane ``a x + b y + c z + d = 0`` (unit normal toward the free side),
+   a pose whose fingers or palm (palm swept back by ``approach_distance_m``) come closer than
+   ``table_clearance_m`` to the plane, or cross it, goes.
+4. ``collision`` (paper): a cylinder of radius ``l_j`` and half-height ``min(h, l_w / 2)`` about
+   the line; cloud points between its end planes but outside it are obstacles, and a pose whose
+   gripper body (two open fingers and the palm) holds any of them goes.
+5. ``sweep`` (addition): the paper only looks between the end planes. Any cloud point in the
+   volume the hand sweeps also removes the pose: the open fingers; the palm swept back by
+   ``approach_distance_m`` (the straight-line approach from the pre-grasp pose); and the fingers'
+   closing path from ``l_w`` down to ``contact_depth_m`` beyond each contact (nearer points are
+   the contact surface itself). E.g. the body of a mug beside a finger that grips its handle.
+
+Rules 4 and 5 are exact for the box model of the gripper and cost O(lines x points), not
+O(candidates x points): in the frame of a line (``s`` along it, polar ``r, theta`` about it) a
+point is inside a box at roll ``phi`` iff ``s`` is within the box's extent along the closing axis
+and ``psi = theta - phi`` satisfies ``r cos(psi) in [z_lo, z_hi]`` and ``|r sin(psi)| <= y_half``:
+at most four arcs of ``phi``, which mark the discrete rolls they contain.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from hsqbench.planner.candidates import KEPT, REJECTION_REASONS, CandidateSet, roll_frames
+from hsqbench.planner.config import GraspConfig
+from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.planner.gripper import GripperModel
+
+#: One line per rule, for messages and the viewer's legend.
+RULE_DESCRIPTIONS = {
+    "width": "contacts farther apart than the gripper opens",
+    "support": "too few cloud points at a contact, or no surface there facing the finger",
+    "table": "fingers or palm would enter the support plane",
+    "collision": "paper's test: object points outside the jaw's reach between the fingers",
+    "sweep": "a cloud point in the path of the fingers (approach, closing) or the palm (approach)",
+}
+
+#: Line-by-point pairs processed at once (memory bound: a few arrays of this many float64).
+_CHUNK_PAIRS = 1_000_000
+#: Query points used to estimate the cloud's spacing (a seeded subset is as good as all).
+_SPACING_SAMPLES = 2000
+#: Angular slack, radians, when deciding whether a discrete roll lies in an arc (favours collision).
+_ARC_SLACK = 1e-9
+
+
+@dataclass(frozen=True)
+class EliminationReport:
+    """What elimination did.
+
+    Attributes:
+        remaining: candidates left after each rule, in order, starting with ``synthesised``.
+        kappa: the support threshold used (points of the downsampled cloud).
+        spacing_m: the downsampled cloud's median nearest-neighbour distance used for ``kappa``.
+        n_points: points of the downsampled cloud the rules were checked against.
+    """
+
+    remaining: dict[str, int]
+    kappa: int
+    spacing_m: float
+    n_points: int
+
+
+def cloud_spacing(points: NDArray, seed: int = 0) -> float:
+    """Median nearest-neighbour distance of the cloud, metres (a seeded subset of queries)."""
+    if points.shape[0] < 2:
+        return float("inf")
+    rng = np.random.default_rng(seed)
+    n = min(points.shape[0], _SPACING_SAMPLES)
+    query = points[rng.choice(points.shape[0], size=n, replace=False)]
+    dist, _ = cKDTree(points).query(query, k=2)
+    return float(np.median(dist[:, 1]))
+
+
+def support_kappa(spacing: float, config: GraspConfig) -> int:
+    """Points a supported contact needs: ``max(min_points, fraction * pi r^2 / spacing^2)``."""
+    expected = np.pi * config.support_radius_m**2 / max(spacing, 1e-9) ** 2
+    return max(int(config.support_min_points), int(np.ceil(config.support_min_fraction * expected)))
+
+
+def _line_coordinates(
+    points: NDArray, centres: NDArray, directions: NDArray, approach0: NDArray
+) -> tuple[NDArray, NDArray, NDArray]:
+    """Points in each line's frame: ``s`` along ``d``, ``u`` along ``e1``, ``v`` along ``e2``; (M, L).
+
+    Written as broadcast sums, not ``points @ axes.T``: a (M, 3) x (3, L) product is too skinny
+    for BLAS, whose threads only add overhead on a busy machine.
+    """
+    e2 = np.cross(directions, approach0)
+    rel = [points[:, k, None] for k in range(3)]
+
+    def project(axes: NDArray) -> NDArray:
+        offset = np.einsum("ij,ij->i", centres, axes)
+        return rel[0] * axes[:, 0] + rel[1] * axes[:, 1] + rel[2] * axes[:, 2] - offset
+
+    return project(directions), project(approach0), project(e2)
+
+
+def _chunks(n_lines: int, n_points: int):
+    size = max(1, _CHUNK_PAIRS // max(n_points, 1))
+    for start in range(0, n_lines, size):
+        yield slice(start, min(start + size, n_lines))
+
+
+@dataclass(frozen=True)
+class SupportStats:
+    """What the support cylinders at the two contacts of each line hold.
+
+    Attributes:
+        counts: (n, 2) cloud points in the cylinder at the ``+d`` and ``-d`` contact.
+        cos_tilt: (n, 2) ``|cos|`` of the angle between the line and the normal of the plane
+            fitted to those points (smallest principal axis); 0 where fewer than 3 points.
+    """
+
+    counts: NDArray[np.int64]
+    cos_tilt: NDArray[np.float64]
+
+
+def support_stats(
+    points: NDArray, cands: CandidateSet, lines: NDArray[np.int64], config: GraspConfig
+) -> SupportStats:
+    """Count the points near each contact of ``lines`` and fit a plane to them."""
+    n = lines.size
+    counts = np.zeros((n, 2), dtype=np.int64)
+    cos_tilt = np.zeros((n, 2))
+    L = cands.lines
+    r2 = config.support_radius_m**2
+    depth = config.contact_depth_m
+    for sl in _chunks(n, points.shape[0]):
+        idx = lines[sl]
+        m = idx.size
+        s, u, v = _line_coordinates(points, L.centres[idx], L.directions[idx], L.approach0[idx])
+        h = L.half_lengths[idx]
+        radial = u * u + v * v <= r2
+        for side, sign in enumerate((1.0, -1.0)):
+            t = sign * s
+            pt, ln = np.nonzero(radial & (t > 0.0) & (np.abs(t - h) <= depth))
+            coords = np.stack([t[pt, ln], u[pt, ln], v[pt, ln]], axis=1)
+            count = np.bincount(ln, minlength=m)
+            counts[sl, side] = count
+            # Covariance of each cylinder's points, (m, 3, 3), from per-line sums.
+            safe = np.maximum(count, 1)[:, None]
+            sums = [np.bincount(ln, weights=coords[:, k], minlength=m) for k in range(3)]
+            mean = np.stack(sums, axis=1).astype(np.float64) / safe
+            centred = coords - mean[ln]
+            cov = np.empty((m, 3, 3))
+            for i in range(3):
+                for j in range(i, 3):
+                    w = centred[:, i] * centred[:, j]
+                    cov[:, i, j] = cov[:, j, i] = np.bincount(ln, weights=w, minlength=m)
+            _, vectors = np.linalg.eigh(cov)
+            cos_tilt[sl, side] = np.where(count >= 3, np.abs(vectors[:, 0, 0]), 0.0)
+    return SupportStats(counts, cos_tilt)
+
+
+def table_clear(
+    cands: CandidateSet,
+    lines: NDArray[np.int64],
+    plane: NDArray,
+    gripper: GripperModel,
+    config: GraspConfig,
+) -> NDArray[np.bool_]:
+    """(len(lines), R): the swept gripper boxes of each roll stay on the free side of ``plane``."""
+    boxes = gripper.boxes(palm_extension_m=config.approach_distance_m)
+    # The 8 corners of each of the 3 boxes, grasp frame: (24, 3).
+    pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    corners = np.concatenate([box[pick, [0, 1, 2]] for box in boxes])
+    L = cands.lines
+    frames = roll_frames(L.directions[lines], L.approach0[lines], cands.roll_angles)
+    normal, offset = plane[:3], plane[3]
+    # n . (P_G + R c) + d for every corner: (lines, R, 24).
+    base = L.centres[lines] @ normal + offset
+    along = np.einsum("k,lrkj->lrj", normal, frames)
+    dist = base[:, None, None] + np.einsum("lrj,cj->lrc", along, corners)
+    return np.all(dist >= config.table_clearance_m, axis=2)
+
+
+def _mark_arcs(
+    in_x: NDArray[np.bool_],
+    r: NDArray,
+    u: NDArray,
+    v: NDArray,
+    line: NDArray[np.int64],
+    box: NDArray,
+    n_roll: int,
+    diff: NDArray,
+) -> None:
+    """Add +1/-1 markers to ``diff`` (n_lines, 3 n_roll + 1) for the rolls at which each point
+    (coordinates in its line's frame) lies inside ``box`` (grasp frame, symmetric in y); ``in_x``
+    says which points lie within the box's extent along the closing axis."""
+    (_, _, z_lo), (_, y_hi, z_hi) = box
+    # The box's distance range from the line bounds r: a cheap filter before any trigonometry.
+    r_min = max(z_lo, -z_hi, 0.0)
+    r_max = np.hypot(max(abs(z_lo), abs(z_hi)), y_hi)
+    keep = in_x & (r >= r_min) & (r <= r_max)
+    r, line = r[keep], line[keep]
+    if r.size == 0:
+        return
+    theta = np.arctan2(v[keep], u[keep])
+    rs = np.maximum(r, 1e-12)
+    # |psi| for which r cos(psi) lies in [z_lo, z_hi] ...
+    reach = (z_lo <= rs) & (z_hi >= -rs)
+    a_lo = np.arccos(np.clip(z_hi / rs, -1.0, 1.0))
+    a_hi = np.arccos(np.clip(z_lo / rs, -1.0, 1.0))
+    # ... and |r sin(psi)| <= y_half: |psi| <= beta or |psi| >= pi - beta.
+    beta = np.arcsin(np.clip(y_hi / rs, 0.0, 1.0))
+    step = 2.0 * np.pi / n_roll
+    for lo, hi in ((a_lo, np.minimum(a_hi, beta)), (np.maximum(a_lo, np.pi - beta), a_hi)):
+        ok = reach & (lo <= hi)
+        if not np.any(ok):
+            continue
+        t, p, q, ln = theta[ok], lo[ok], hi[ok], line[ok]
+        # psi in [p, q] and in [-q, -p]; phi = theta - psi.
+        for start, stop in ((t - q, t - p), (t + p, t + q)):
+            j_lo = np.ceil(start / step - _ARC_SLACK).astype(np.int64) + n_roll
+            j_hi = np.floor(stop / step + _ARC_SLACK).astype(np.int64) + n_roll
+            valid = j_lo <= j_hi
+            width = diff.shape[1]
+            starts = np.bincount(ln[valid] * width + j_lo[valid], minlength=diff.size)
+            stops = np.bincount(ln[valid] * width + j_hi[valid] + 1, minlength=diff.size)
+            diff += (starts - stops).reshape(diff.shape)
+
+
+def body_hits(
+    points: NDArray,
+    cands: CandidateSet,
+    lines: NDArray[np.int64],
+    boxes: NDArray,
+    obstacle_radius: NDArray | None = None,
+    obstacle_half_height: NDArray | None = None,
+    closing_from: NDArray | None = None,
+) -> NDArray[np.bool_]:
+    """(len(lines), R): whether any obstacle point lies inside any of ``boxes`` at each roll.
+
+    Obstacles are all ``points``, or, when ``obstacle_radius`` and ``obstacle_half_height`` (per
+    line) are given, only the points with ``|s| <= half_height`` and ``r > radius`` (the paper's
+    collision cylinder). With ``closing_from`` (per line, metres) the fingers' closing sweep is a
+    further region: the cross-section of the finger ``boxes[0]`` over
+    ``closing_from <= |s| <= `` its inner face, on both sides.
+    """
+    if not np.allclose(boxes[:, 0, 1], -boxes[:, 1, 1]):
+        raise ValueError("gripper boxes must be symmetric about the closing-approach plane")
+    n_roll = cands.n_roll
+    out = np.zeros((lines.size, n_roll), dtype=bool)
+    if lines.size == 0 or points.shape[0] == 0:
+        return out
+    L = cands.lines
+    reach = float(np.max(np.abs(boxes)))
+    for sl in _chunks(lines.size, points.shape[0]):
+        idx = lines[sl]
+        s, u, v = _line_coordinates(points, L.centres[idx], L.directions[idx], L.approach0[idx])
+        r2 = u * u + v * v
+        near = (np.abs(s) <= reach) & (r2 <= 2.0 * reach * reach)
+        if obstacle_radius is not None:
+            near &= np.abs(s) <= obstacle_half_height[sl]
+            near &= r2 > obstacle_radius[sl] ** 2
+        pt, ln = np.nonzero(near)
+        s_k, u_k, v_k = s[pt, ln], u[pt, ln], v[pt, ln]
+        r = np.sqrt(r2[pt, ln])
+        n = idx.size
+        diff = np.zeros((n, 3 * n_roll + 1), dtype=np.int64)
+        for box in boxes:
+            in_x = (s_k >= box[0, 0]) & (s_k <= box[1, 0])
+            _mark_arcs(in_x, r, u_k, v_k, ln, box, n_roll, diff)
+        if closing_from is not None:
+            a = np.abs(s_k)
+            in_x = (a >= closing_from[sl][ln]) & (a <= boxes[0][0, 0])
+            _mark_arcs(in_x, r, u_k, v_k, ln, boxes[0], n_roll, diff)
+        covered = np.cumsum(diff, axis=1)[:, : 3 * n_roll] > 0
+        out[sl] = covered.reshape(n, 3, n_roll).any(axis=1)
+    return out
+
+
+def eliminate(
+    cands: CandidateSet,
+    points: NDArray,
+    gripper: GripperModel,
+    config: GraspConfig,
+    support_plane: NDArray | None = None,
+    seed: int = 0,
+) -> EliminationReport:
+    """Run the rules on ``cands`` in place (fills ``rejected_by``); returns the counts."""
+    n_roll = cands.n_roll
+    L = cands.lines
+    # code[line, roll]: 0 while kept, else 1 + the index of the rule that removed it.
+    code = np.zeros((len(L), n_roll), dtype=np.int8)
+    remaining = {"synthesised": len(cands)}
+    points = voxel_downsample(points, config.elimination_voxel_m).points
+
+    def apply(rule: str, lines: NDArray[np.int64], hit: NDArray[np.bool_]) -> None:
+        """Mark rolls ``hit`` (len(lines), R) or whole lines (hit (len(lines),)) as removed."""
+        block = code[lines]
+        mask = hit if hit.ndim == 2 else np.broadcast_to(hit[:, None], block.shape)
+        block[(block == 0) & mask] = 1 + REJECTION_REASONS.index(rule)
+        code[lines] = block
+        remaining[rule] = int(np.count_nonzero(code == 0))
+
+    def alive_lines() -> NDArray[np.int64]:
+        return np.flatnonzero(np.any(code == 0, axis=1))
+
+    all_lines = np.arange(len(L))
+    apply(
+        "width", all_lines, 2.0 * L.half_lengths > gripper.max_opening_m - config.opening_margin_m
+    )
+
+    spacing = cloud_spacing(points, seed)
+    kappa = support_kappa(spacing, config)
+    lines = alive_lines()
+    stats = support_stats(points, cands, lines, config)
+    facing = stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
+    apply("support", lines, np.any((stats.counts < kappa) | ~facing, axis=1))
+
+    lines = alive_lines()
+    if support_plane is not None:
+        clear = table_clear(cands, lines, np.asarray(support_plane, float), gripper, config)
+        apply("table", lines, ~clear)
+    else:
+        remaining["table"] = remaining["support"]
+
+    # The paper's obstacles: between the end planes, outside radius l_j.
+    lines = alive_lines()
+    half_height = np.minimum(L.half_lengths[lines], 0.5 * gripper.max_opening_m)
+    radius = np.full(lines.size, gripper.jaw_length_m)
+    apply("collision", lines, body_hits(points, cands, lines, gripper.boxes(), radius, half_height))
+
+    lines = alive_lines()
+    boxes = gripper.boxes(palm_extension_m=config.approach_distance_m)
+    closing_from = L.half_lengths[lines] + config.contact_depth_m
+    apply("sweep", lines, body_hits(points, cands, lines, boxes, closing_from=closing_from))
+
+    names = np.array((KEPT, *REJECTION_REASONS), dtype=cands.rejected_by.dtype)
+    cands.rejected_by = names[code.ravel()]
+    return EliminationReport(
+        remaining=remaining, kappa=kappa, spacing_m=spacing, n_points=points.shape[0]
+    )

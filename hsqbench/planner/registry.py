@@ -1,0 +1,63 @@
+"""Planners by name, so that the harness, the CLI and configs can pick one with a string.
+
+A factory takes an optional config (whatever that planner understands: a config object, a config
+name or a YAML path) and returns a :class:`~hsqbench.planner.api.Planner`. Registering a new
+planner is one call::
+
+    from hsqbench.planner.registry import register_planner
+    register_planner("antipodal", lambda config=None: AntipodalPlanner(config))
+
+Factories import their planner lazily, so listing names costs nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from hsqbench.planner.api import Planner
+
+PlannerFactory = Callable[..., "Planner"]
+
+
+def _hsq(config: Any = None) -> Planner:
+    from hsqbench.planner.api import HSQPlanner
+
+    return HSQPlanner(config)
+
+
+_FACTORIES: dict[str, PlannerFactory] = {"hsq": _hsq}
+
+
+def register_planner(name: str, factory: PlannerFactory, *, replace: bool = False) -> None:
+    """Make ``get_planner(name)`` call ``factory(config)``.
+
+    Raises:
+        ValueError: ``name`` is empty, or already taken and ``replace`` is False.
+    """
+    if not name or not isinstance(name, str):
+        raise ValueError(f"a planner name must be a non-empty string, got {name!r}")
+    if name in _FACTORIES and not replace:
+        raise ValueError(f"a planner named {name!r} is already registered (pass replace=True)")
+    _FACTORIES[name] = factory
+
+
+def planner_names() -> list[str]:
+    """Registered planner names, sorted."""
+    return sorted(_FACTORIES)
+
+
+def get_planner(name: str, config: Any = None) -> Planner:
+    """A new planner ``name`` built with ``config`` (None: that planner's defaults).
+
+    Raises:
+        ValueError: unknown ``name``; the message lists the registered names.
+    """
+    try:
+        factory = _FACTORIES[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown planner {name!r}; choose one of: {', '.join(planner_names())}"
+        ) from None
+    return factory(config)

@@ -1,0 +1,217 @@
+"""Elimination rules: each removes a constructed bad candidate and keeps a good one; the exact
+roll-arc collision test agrees with transforming every point into every candidate's frame."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hsqbench.planner.candidates import CandidateSet, ClosingLines, roll_frames
+from hsqbench.planner.config import GraspConfig
+from hsqbench.planner.elimination import body_hits, eliminate, support_kappa
+from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.synthesis import roll_angles
+
+GRIPPER = GripperModel()
+CONFIG = GraspConfig()
+ROLLS = roll_angles(CONFIG)
+
+
+def one_line(half_length: float, centre=(0.0, 0.0, 0.0), direction=(1.0, 0.0, 0.0)) -> CandidateSet:
+    """A single closing line; at roll 0 the approach is +z, so the palm sits at -z."""
+    d = np.asarray(direction, dtype=float)
+    e1 = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    lines = ClosingLines(
+        centres=np.asarray(centre, dtype=float)[None],
+        directions=d[None],
+        approach0=e1[None],
+        half_lengths=np.array([half_length]),
+        source=np.zeros(1, dtype=np.int64),
+        axis=np.zeros(1, dtype=np.int64),
+        family=np.array(["axis"]),
+    )
+    return CandidateSet(lines, ROLLS)
+
+
+def patch(center, normal, radius=0.012, spacing=0.002) -> np.ndarray:
+    """A flat disc of points (a face seen by a camera) around ``center`` facing ``normal``."""
+    normal = np.asarray(normal, dtype=float)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(normal[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    a = np.cross(normal, helper)
+    a /= np.linalg.norm(a)
+    b = np.cross(normal, a)
+    g = np.arange(-radius, radius + 1e-9, spacing)
+    ga, gb = np.meshgrid(g, g)
+    keep = ga**2 + gb**2 <= radius**2
+    return np.asarray(center) + ga[keep, None] * a + gb[keep, None] * b
+
+
+def two_faces(half_width: float) -> np.ndarray:
+    """The two faces a line of half length ``half_width`` along x grips."""
+    return np.concatenate(
+        [patch((half_width, 0, 0), (1, 0, 0)), patch((-half_width, 0, 0), (-1, 0, 0))]
+    )
+
+
+def reasons(cands: CandidateSet) -> np.ndarray:
+    return cands.rejected_by.reshape(len(cands.lines), cands.n_roll)[0]
+
+
+def test_width_removes_lines_wider_than_the_opening() -> None:
+    for half, expect in ((0.03, ""), (0.039, "width"), (0.05, "width")):
+        cands = one_line(half)
+        eliminate(cands, two_faces(half), GRIPPER, CONFIG)
+        assert set(reasons(cands)) == {expect} if expect else "width" not in set(reasons(cands))
+
+
+def test_support_needs_points_at_both_contacts() -> None:
+    good = one_line(0.02)
+    eliminate(good, two_faces(0.02), GRIPPER, CONFIG)
+    assert np.all(reasons(good) == "")
+    # The -x face is missing (unseen or not there): nothing to push against on that side.
+    bad = one_line(0.02)
+    eliminate(bad, patch((0.02, 0, 0), (1, 0, 0)), GRIPPER, CONFIG)
+    assert np.all(reasons(bad) == "support")
+    # A face 15 mm beyond the modelled contact is too far from it to count.
+    far = one_line(0.02)
+    cloud = np.concatenate([patch((0.02, 0, 0), (1, 0, 0)), patch((-0.035, 0, 0), (-1, 0, 0))])
+    eliminate(far, cloud, GRIPPER, CONFIG)
+    assert np.all(reasons(far) == "support")
+
+
+def test_support_threshold_follows_cloud_density() -> None:
+    dense, sparse = support_kappa(0.001, CONFIG), support_kappa(0.006, CONFIG)
+    assert dense > sparse >= CONFIG.support_min_points
+    # A quarter of a disc of radius 1 cm at 1 mm spacing: about 0.25 * 314 points.
+    assert dense == pytest.approx(0.25 * np.pi * 100, rel=0.02)
+
+
+def test_table_removes_rolls_whose_gripper_enters_the_plane() -> None:
+    # Closing along x at 2 cm above a table z = 0: approaching from above is fine, from the side
+    # the palm (6.3 cm thick) dips into the table, from below the whole hand is under it.
+    cands = one_line(0.02, centre=(0.0, 0.0, 0.02))
+    cloud = two_faces(0.02) + np.array([0.0, 0.0, 0.02])
+    eliminate(cands, cloud, GRIPPER, CONFIG, support_plane=np.array([0.0, 0.0, 1.0, 0.0]))
+    frames = roll_frames(cands.lines.directions, cands.lines.approach0, ROLLS)[0]
+    approach_z = frames[:, 2, 2]
+    r = reasons(cands)
+    assert np.all(r[approach_z < -0.99] == "")  # straight down
+    assert np.all(r[np.abs(approach_z) < 0.1] == "table")  # sideways: the palm dips in
+    assert np.all(r[approach_z > 0.5] == "table")  # from below
+    # Without the plane, nothing is removed.
+    free = one_line(0.02, centre=(0.0, 0.0, 0.02))
+    eliminate(free, cloud, GRIPPER, CONFIG)
+    assert np.all(reasons(free) == "")
+
+
+def test_paper_collision_removes_rolls_whose_palm_meets_the_object() -> None:
+    # An object part 6 cm below the closing line, between the end planes: beyond the jaw's reach
+    # l_j = 3.74 cm. The palm meets it when approaching from above (palm at -approach = ...).
+    obstacle = patch((0.0, 0.0, -0.06), (0, 0, 1), radius=0.01)
+    cands = one_line(0.02)
+    eliminate(cands, np.concatenate([two_faces(0.02), obstacle]), GRIPPER, CONFIG)
+    frames = roll_frames(cands.lines.directions, cands.lines.approach0, ROLLS)[0]
+    approach_z = frames[:, 2, 2]
+    r = reasons(cands)
+    # Roll 0 approaches along +z, so the palm is at -z, on the obstacle: removed.
+    assert r[np.argmax(approach_z)] == "collision"
+    # Approaching from -z puts the palm on the other side: kept.
+    assert r[np.argmin(approach_z)] == ""
+    # Closer than l_j the part sits between the fingers: not an obstacle.
+    near = one_line(0.02)
+    inner = patch((0.0, 0.0, -0.03), (0, 0, 1), radius=0.01)
+    eliminate(near, np.concatenate([two_faces(0.02), inner]), GRIPPER, CONFIG)
+    assert np.all(reasons(near) == "")
+
+
+def test_sweep_removes_poses_whose_fingers_hit_points_beyond_the_contacts() -> None:
+    # A wall 5 cm from P_G along the closing axis, beyond the contact at 2 cm: outside the paper's
+    # end planes, but exactly where the open finger (4 to 6.6 cm) goes.
+    wall = patch((0.05, 0.0, 0.0), (1, 0, 0), radius=0.02)
+    cands = one_line(0.02)
+    eliminate(cands, np.concatenate([two_faces(0.02), wall]), GRIPPER, CONFIG)
+    assert set(reasons(cands)) == {"sweep"}
+    # The same wall 12 cm away is past the palm's half width (10.2 cm): kept.
+    far_wall = patch((0.12, 0.0, 0.0), (1, 0, 0), radius=0.02)
+    ok = one_line(0.02)
+    eliminate(ok, np.concatenate([two_faces(0.02), far_wall]), GRIPPER, CONFIG)
+    assert np.all(reasons(ok) == "")
+
+
+def test_sweep_catches_points_behind_the_palm() -> None:
+    # A point 15 cm behind P_G along -z: behind the palm (ends at 3.74 + 9.19 = 12.9 cm) but
+    # inside the 5 cm approach sweep. Only the roll whose palm points at it is removed.
+    point = patch((0.0, 0.0, -0.15), (0, 0, 1), radius=0.004)
+    cands = one_line(0.02)
+    eliminate(cands, np.concatenate([two_faces(0.02), point]), GRIPPER, CONFIG)
+    frames = roll_frames(cands.lines.directions, cands.lines.approach0, ROLLS)[0]
+    r = reasons(cands)
+    assert r[np.argmax(frames[:, 2, 2])] == "sweep"
+    assert r[np.argmin(frames[:, 2, 2])] == ""
+
+
+def brute_force_hits(points, cands, boxes, radius=None, half_height=None) -> np.ndarray:
+    """Every point in every candidate's grasp frame, tested against every box."""
+    L = cands.lines
+    frames = roll_frames(L.directions, L.approach0, cands.roll_angles)  # (L, R, 3, 3)
+    rel = points[None] - L.centres[:, None]  # (L, M, 3)
+    local = np.einsum("lmk,lrkj->lrmj", rel, frames)  # (L, R, M, 3)
+    obstacle = np.ones(rel.shape[:2], dtype=bool)
+    if radius is not None:
+        s = np.einsum("lmk,lk->lm", rel, L.directions)
+        r2 = np.einsum("lmk,lmk->lm", rel, rel) - s * s
+        obstacle = (np.abs(s) <= half_height[:, None]) & (r2 > radius[:, None] ** 2)
+    inside = np.zeros(local.shape[:3], dtype=bool)
+    for lo, hi in boxes:
+        inside |= np.all((local >= lo) & (local <= hi), axis=-1)
+    return np.any(inside & obstacle[:, None, :], axis=2)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_arc_collision_test_matches_brute_force(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n_lines = 12
+    d = rng.normal(size=(n_lines, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    e1 = np.cross(d, rng.normal(size=(n_lines, 3)))
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    lines = ClosingLines(
+        centres=rng.uniform(-0.05, 0.05, size=(n_lines, 3)),
+        directions=d,
+        approach0=e1,
+        half_lengths=rng.uniform(0.005, 0.04, size=n_lines),
+        source=np.zeros(n_lines, dtype=np.int64),
+        axis=np.zeros(n_lines, dtype=np.int64),
+        family=np.array(["axis"] * n_lines),
+    )
+    cands = CandidateSet(lines, ROLLS)
+    points = rng.uniform(-0.2, 0.2, size=(40, 3))
+    index = np.arange(n_lines)
+    for boxes in (GRIPPER.boxes(), GRIPPER.boxes(palm_extension_m=0.05)):
+        fast = body_hits(points, cands, index, boxes)
+        slow = brute_force_hits(points, cands, boxes)
+        assert 0 < slow.sum() < slow.size  # a meaningful mix of hits and misses
+        np.testing.assert_array_equal(fast, slow)
+    radius = np.full(n_lines, GRIPPER.jaw_length_m)
+    half = np.minimum(lines.half_lengths, GRIPPER.max_opening_m / 2)
+    fast = body_hits(points, cands, index, GRIPPER.boxes(), radius, half)
+    slow = brute_force_hits(points, cands, GRIPPER.boxes(), radius, half)
+    assert slow.sum() > 0
+    np.testing.assert_array_equal(fast, slow)
+
+
+def test_counts_follow_the_rule_order() -> None:
+    # Two lines: one too wide, one fine but with its palm side blocked at roll 0.
+    cands = one_line(0.02)
+    wide = one_line(0.05)
+    both = CandidateSet(ClosingLines.concatenate([cands.lines, wide.lines]), ROLLS)
+    obstacle = patch((0.0, 0.0, -0.06), (0, 0, 1), radius=0.01)
+    report = eliminate(both, np.concatenate([two_faces(0.02), obstacle]), GRIPPER, CONFIG)
+    n = len(ROLLS)
+    assert report.remaining["synthesised"] == 2 * n
+    assert report.remaining["width"] == n
+    assert report.remaining["support"] == n
+    counts = both.counts_by_reason()
+    assert counts["width"] == n
+    assert counts["collision"] == n - report.remaining["collision"]
+    assert counts["kept"] == report.remaining["sweep"]
