@@ -15,9 +15,9 @@
    ``p = dropout_prob + (1 - dropout_prob) * ramp(theta)``, where ``theta`` is the angle between
    the ray and the surface normal (from the clean depth image) and ``ramp`` rises linearly from
    0 at ``grazing_start_deg`` to 1 at ``grazing_full_deg`` (the returned signal falls with
-   ``cos theta`` and the camera invalidates weak pixels); edge pixels that did not become flying
-   pixels are dropped with at least ``edge_dropout_prob`` (the sensor's own invalidation of
-   mixed pixels).
+   ``cos theta`` and the camera invalidates weak pixels). On edges the normal is undefined:
+   flying pixels are dropped with ``dropout_prob``, the other edge pixels with
+   ``max(dropout_prob, edge_dropout_prob)`` (the sensor's own invalidation of mixed pixels).
 
 Numbers (see ``configs/perception.yaml``): the Azure Kinect's specification gives a random-error
 standard deviation <= 17 mm and a systematic error < 11 mm + 0.1 % of the distance over its range
@@ -180,10 +180,12 @@ def apply_tof_noise(
     z = z * (1.0 + config.sigma(r) * gauss / np.where(valid, r, 1.0))
 
     cos = incidence_cosine(backproject(depth, K), valid)
-    p_drop = config.dropout_prob + (1.0 - config.dropout_prob) * grazing_ramp(
-        cos, config.grazing_start_deg, config.grazing_full_deg
-    )
-    p_drop = np.where(edge & ~flying, np.maximum(p_drop, config.edge_dropout_prob), p_drop)
+    base = config.dropout_prob
+    ramp = grazing_ramp(cos, config.grazing_start_deg, config.grazing_full_deg)
+    # Across a discontinuity the finite-difference normal is meaningless: edges follow their
+    # own rule, not the grazing one.
+    p_drop = np.where(edge, base, base + (1.0 - base) * ramp)
+    p_drop = np.where(edge & ~flying, max(base, config.edge_dropout_prob), p_drop)
     dropped = valid & (u_drop < p_drop)
     keep = valid & ~dropped & (z > 0)
     out = np.where(keep, z, 0.0).astype(np.float32)
