@@ -19,11 +19,16 @@ intermediate. G is homogeneous of degree 2 in p, so the surface radius along a d
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
+from scipy.special import betaln
+
+if TYPE_CHECKING:
+    import trimesh
 
 #: Shape exponents are kept within these bounds everywhere (dimensionless).
 EPS_MIN = 0.05
@@ -46,6 +51,10 @@ _SEAM_BAND_SHARE = 0.5
 #: A spare node fills a hole if no sample lies within this fraction of the spacing; an ideal square
 #: grid has no point farther than 0.71 spacing from a node, distorted cells up to about 0.8.
 _HOLE_FRACTION = 0.8
+#: Curvature is evaluated at least this far (in units of the semi-axes) from the planes of the local
+#: axes. For eps > 1 the curvature at an axis endpoint is unbounded, so the value there is the one
+#: 1e-4 semi-axes away: large but finite (about 1e8 1/m^2 for eps = 1.9 and cm-sized shapes).
+CURVATURE_AXIS_OFFSET = 1e-4
 
 #: Length of the flat parameter vector: eps1, eps2, ax, ay, az, rotation vector (3), translation (3).
 N_PARAMS = 11
@@ -178,6 +187,29 @@ class Superquadric:
         ):
             raise ValueError("rotation must be a proper rotation matrix (orthonormal, det +1)")
 
+    def __repr__(self) -> str:
+        try:
+            rotvec = np.round(Rotation.from_matrix(self.rotation).as_rotvec(), 3).tolist()
+        except ValueError:
+            rotvec = "invalid"
+        return (
+            f"Superquadric(eps=({self.eps1:.3g}, {self.eps2:.3g}), "
+            f"scale_mm={np.round(1e3 * self.scale, 2).tolist()}, rotvec={rotvec}, "
+            f"t_mm={np.round(1e3 * self.translation, 2).tolist()})"
+        )
+
+    @property
+    def principal_axes(self) -> NDArray[np.float64]:
+        """3x3 matrix whose columns are the local x, y, z axes in the world frame (unit vectors)."""
+        return self.rotation.copy()
+
+    @property
+    def volume(self) -> float:
+        """Enclosed volume, m^3: ``2 ax ay az eps1 eps2 B(eps1/2 + 1, eps1) B(eps2/2, eps2/2)``."""
+        e1, e2 = self.eps1, self.eps2
+        log_beta = betaln(0.5 * e1 + 1.0, e1) + betaln(0.5 * e2, 0.5 * e2)
+        return float(2.0 * np.prod(self.scale) * e1 * e2 * np.exp(log_beta))
+
     # ----------------------------------------------------------------- frames and parameters
     def to_local(self, points: ArrayLike) -> NDArray[np.float64]:
         """World points (N, 3) -> local frame: ``R^T (p - t)``."""
@@ -260,6 +292,15 @@ class Superquadric:
         norm = np.linalg.norm(grad, axis=1, keepdims=True)
         unit = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), (0.0, 0.0, 1.0))
         return unit @ self.rotation.T
+
+    def gaussian_curvature(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Gaussian curvature (1/m^2, >= 0, finite) at world points on or near the surface, (N,).
+
+        Each point is projected radially onto the surface first; see
+        :func:`gaussian_curvature_local` for the formula and for what is returned at the axis
+        endpoints (evaluated :data:`CURVATURE_AXIS_OFFSET` semi-axes away from the axis planes).
+        """
+        return gaussian_curvature_local(self.to_local(points), self.eps1, self.eps2, self.scale)
 
     # ----------------------------------------------------------------- surface sampling
     def _face_grid_nodes(self, spacing: float) -> dict[tuple[int, int], NDArray[np.float64]]:
@@ -382,6 +423,131 @@ class Superquadric:
         local /= np.sqrt(self.inside_outside_pow(local, local=True))[:, None]
         normals = grad / np.linalg.norm(grad, axis=1, keepdims=True)
         return self.to_world(local), normals @ self.rotation.T
+
+    # ----------------------------------------------------------------- mesh
+    def to_mesh(self, n_quarter: int = 32) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Closed, consistently oriented (outward) triangle mesh of the surface, world frame.
+
+        Spherical product of the cross-section (eps2, semi-axes ax, ay) and a meridian (eps1,
+        semi-axes (ax + ay)/2, az), each quarter split into ``n_quarter`` equal arc-length steps so
+        that flat faces, rounded edges and pinched tips are all resolved; ``2 n_quarter - 1`` rings of
+        ``4 n_quarter`` vertices plus the two poles, every vertex projected radially onto ``G = 1``.
+
+        Returns:
+            ``(vertices (V, 3) metres, faces (F, 3) vertex indices)``.
+        """
+        n = int(n_quarter)
+        if n < 2:
+            raise ValueError(f"n_quarter must be >= 2, got {n_quarter}")
+        ax, ay, az = self.scale
+
+        def quarter(eps: float, a: float, b: float) -> tuple[NDArray, NDArray]:
+            """n + 1 points from (a, 0) to (0, b), normalised by (a, b), equal arc-length steps."""
+            c, h, length = _quarter_curve(eps, a, b)
+            steps = np.linspace(length[-1], 0.0, n + 1)
+            return np.interp(steps, length, c) / a, np.interp(steps, length, h) / b
+
+        cx, cy = quarter(self.eps2, ax, ay)
+        ring = np.concatenate(
+            [
+                np.column_stack([cx[:n], cy[:n]]),
+                np.column_stack([-cx[n:0:-1], cy[n:0:-1]]),
+                np.column_stack([-cx[:n], -cy[:n]]),
+                np.column_stack([cx[n:0:-1], -cy[n:0:-1]]),
+            ]
+        )
+        mc, mh = quarter(self.eps1, 0.5 * (ax + ay), az)  # from the equator to the north pole
+        lat_c = np.concatenate([mc[n - 1 : 0 : -1], mc[0:1], mc[1:n]])
+        lat_h = np.concatenate([mh[n - 1 : 0 : -1], mh[0:1], -mh[1:n]])
+        n_ring = ring.shape[0]
+        rings = np.column_stack(
+            [
+                np.outer(lat_c, ring[:, 0]).ravel(),
+                np.outer(lat_c, ring[:, 1]).ravel(),
+                np.repeat(lat_h, n_ring),
+            ]
+        )
+        local = np.vstack([rings, [[0.0, 0.0, 1.0]], [[0.0, 0.0, -1.0]]]) * self.scale
+        local /= np.sqrt(self.inside_outside_pow(local, local=True))[:, None]
+
+        n_lat = lat_c.size
+        north, south = n_lat * n_ring, n_lat * n_ring + 1
+        k = np.arange(n_ring)
+        k1 = (k + 1) % n_ring
+        upper = (np.arange(n_lat - 1)[:, None] * n_ring + k).ravel()
+        upper1 = (np.arange(n_lat - 1)[:, None] * n_ring + k1).ravel()
+        lower, lower1 = upper + n_ring, upper1 + n_ring
+        last = (n_lat - 1) * n_ring
+        faces = np.concatenate(
+            [
+                np.column_stack([np.full(n_ring, north), k, k1]),
+                np.column_stack([upper, lower, lower1]),
+                np.column_stack([upper, lower1, upper1]),
+                np.column_stack([np.full(n_ring, south), last + k1, last + k]),
+            ]
+        )
+        return self.to_world(local), faces.astype(np.int64)
+
+    def to_trimesh(self, n_quarter: int = 32) -> trimesh.Trimesh:
+        """:meth:`to_mesh` as a ``trimesh.Trimesh`` (not processed, so vertex order is kept)."""
+        import trimesh  # heavy; only the viewer and tests need it
+
+        vertices, faces = self.to_mesh(n_quarter)
+        return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def gaussian_curvature_local(
+    local: ArrayLike, eps1: ArrayLike, eps2: ArrayLike, scale: ArrayLike
+) -> NDArray[np.float64]:
+    """Gaussian curvature (1/m^2) of superquadric surfaces at local-frame points, row by row.
+
+    ``eps1``, ``eps2`` are scalars or (N,) and ``scale`` is (3,) or (N, 3), so one call can serve
+    many superquadrics. Each point is first projected radially onto its surface; points within
+    :data:`CURVATURE_AXIS_OFFSET` semi-axes of an axis plane are moved to that distance (the
+    curvature is unbounded at the axis endpoints when eps > 1). The centre maps to the +z tip.
+
+    Math: in scaled coordinates ``q = p / scale`` the surface is ``rho(q) = 1`` with the nested lp
+    norm ``rho = ||(m, qz)||_p1``, ``m = ||(qx, qy)||_p2``, ``p = 2 / eps``. With ``a2 = |qx|/m``,
+    ``b2 = |qy|/m``, ``a1 = m/rho``, ``b1 = |qz|/rho`` the Hessian of rho has rank 2,
+    ``Hq = c1 u u^T + c2 w w^T`` with
+
+        u = (b1 a2^(p2-1) sx, b1 b2^(p2-1) sy, -a1 sz),   c1 = (p1-1)/rho (a1 b1)^(p1-2),
+        w = (b2 sx, -a2 sy, 0),                           c2 = (p2-1)/rho a1^(p1-2) (a2 b2)^(p2-2),
+
+    so ``adj(Hq) = c1 c2 (u x w)(u x w)^T`` and, with the gradient ``gq`` and ``D = diag(scale)``,
+    ``K = g^T adj(H) g / |g|^4 = c1 c2 det[gq, u, w]^2 / (det(D)^2 |D^-1 gq|^4)``. Every factor is
+    a ratio in [0, 1] to a power that is non-negative, or at least -1 with the ratio floored by the
+    axis offset, so K is finite and >= 0 (superquadrics with eps <= 2 are convex).
+    """
+    q = as_points(local) / np.asarray(scale, dtype=np.float64)
+    scale = np.broadcast_to(np.asarray(scale, dtype=np.float64), q.shape)
+    e1 = np.broadcast_to(np.asarray(eps1, dtype=np.float64), q.shape[:1])
+    e2 = np.broadcast_to(np.asarray(eps2, dtype=np.float64), q.shape[:1])
+
+    def norm(q: NDArray) -> NDArray:
+        return np.sqrt(_phi(_phi(q[:, 0] ** 2, q[:, 1] ** 2, e2), q[:, 2] ** 2, e1))
+
+    rho = norm(q)
+    q = np.where(rho[:, None] > 0.0, q / np.where(rho > 0.0, rho, 1.0)[:, None], (0.0, 0.0, 1.0))
+    sign = np.where(q < 0.0, -1.0, 1.0)
+    q = sign * np.maximum(np.abs(q), CURVATURE_AXIS_OFFSET)
+    q /= norm(q)[:, None]
+
+    sq = q**2
+    h, r_x, r_y = _phi_ratios(sq[:, 0], sq[:, 1], e2)
+    _, r_h, r_z = _phi_ratios(h, sq[:, 2], e1)
+    a2, b2, a1, b1 = np.sqrt(r_x), np.sqrt(r_y), np.sqrt(r_h), np.sqrt(r_z)
+    p1, p2 = 2.0 / e1, 2.0 / e2
+    grad_m = sign[:, :2] * np.stack([a2 ** (p2 - 1.0), b2 ** (p2 - 1.0)], axis=1)
+    grad = np.column_stack([(a1 ** (p1 - 1.0))[:, None] * grad_m, sign[:, 2] * b1 ** (p1 - 1.0)])
+    u = np.column_stack([b1[:, None] * grad_m, -sign[:, 2] * a1])
+    w = np.column_stack([b2 * sign[:, 0], -a2 * sign[:, 1], np.zeros_like(a2)])
+    c1 = (p1 - 1.0) * (r_h * r_z) ** (0.5 * p1 - 1.0)
+    c2 = (p2 - 1.0) * a1 ** (p1 - 2.0) * (r_x * r_y) ** (0.5 * p2 - 1.0)
+    triple = np.einsum("ij,ij->i", grad, np.cross(u, w))
+    det_d = np.prod(scale, axis=1)
+    grad_p = np.sum((grad / scale) ** 2, axis=1)
+    return c1 * c2 * triple**2 / (det_d**2 * grad_p**2)
 
 
 # --------------------------------------------------------------------- fit measures of the planner
