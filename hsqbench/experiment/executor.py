@@ -53,8 +53,12 @@ class SerialExecutor:
 
 def _mp_context() -> multiprocessing.context.BaseContext:
     # Not fork: the parent runs a progress thread, and forking a threaded process can deadlock.
-    methods = multiprocessing.get_all_start_methods()
-    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    ctx = multiprocessing.get_context("forkserver")
+    # Workers fork from a server that has already imported the trial code: cheap fresh pools.
+    ctx.set_forkserver_preload(["hsqbench.experiment.backend"])
+    return ctx
 
 
 def _stop_pool(pool: ProcessPoolExecutor, clean: bool) -> None:

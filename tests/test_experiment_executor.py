@@ -1,0 +1,94 @@
+"""Executors: the same trials give the same rows in one process, a pool, or on Ray."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
+from hsqbench.experiment.executor import (
+    WORKER_DIED,
+    LocalExecutor,
+    RayExecutor,
+    SerialExecutor,
+    make_executor,
+)
+from hsqbench.experiment.fake_backend import FakeBackend
+from hsqbench.experiment.results import VOLATILE_COLUMNS, load_results
+from hsqbench.experiment.runner import run_benchmark
+from hsqbench.experiment.seeds import build_trials
+
+CONFIG = ExperimentConfig(
+    planners=("a", "b"),
+    isolated=IsolatedConfig(objects=("mug", "bowl", "apple", "banana"), attempts_per_object=2),
+    packed=PackedConfig(objects=("mug", "bowl", "apple", "banana"), rounds=3, objects_per_round=3),
+)
+
+
+def _rows(run_dir: Path, table: str = "attempts") -> list[tuple]:
+    results = load_results(run_dir)
+    rows = results.attempts if table == "attempts" else results.rounds
+    return sorted(tuple(v for k, v in r.items() if k not in VOLATILE_COLUMNS) for r in rows)
+
+
+@pytest.fixture(scope="module")
+def serial_run(tmp_path_factory) -> Path:
+    run_dir = tmp_path_factory.mktemp("serial") / "run"
+    backend = FakeBackend(raise_on=("apple",))
+    run_benchmark(CONFIG, run_dir, backend=backend, executor=SerialExecutor(), progress=False)
+    return run_dir
+
+
+def test_process_pool_gives_the_same_rows_as_one_process(serial_run, tmp_path) -> None:
+    run_dir = tmp_path / "pool"
+    backend = FakeBackend(raise_on=("apple",))
+    summary = run_benchmark(
+        CONFIG, run_dir, backend=backend, executor=LocalExecutor(jobs=2), progress=False
+    )
+    assert summary.ran == len(build_trials(CONFIG))
+    assert _rows(run_dir) == _rows(serial_run)
+    assert _rows(run_dir, "rounds") == _rows(serial_run, "rounds")
+    workers = {r["worker"] for r in load_results(run_dir).attempts}
+    assert len(workers) == 2  # really two processes
+
+
+def test_a_worker_crash_is_pinned_on_its_trial(tmp_path) -> None:
+    config = ExperimentConfig(
+        planners=("a",),
+        isolated=IsolatedConfig(objects=("mug", "bowl", "apple", "pear", "kiwi"), attempts_per_object=2),
+        packed=PackedConfig(enabled=False),
+    )  # fmt: skip
+    run_dir = tmp_path / "crash"
+    backend = FakeBackend(exit_on=("apple",))  # os._exit in the worker: the pool breaks
+    summary = run_benchmark(
+        config, run_dir, backend=backend, executor=LocalExecutor(jobs=2), progress=False
+    )
+    results = load_results(run_dir)
+    assert len(results.complete_keys) == summary.selected == 10
+    errors = {r["trial_key"]: r["detail"] for r in results.attempts if r["status"] == "error"}
+    assert set(errors) == {"isolated/a/s0/apple/000", "isolated/a/s0/apple/001"}
+    assert all(WORKER_DIED in d for d in errors.values())
+    assert summary.errors == 2
+
+
+def test_make_executor() -> None:
+    assert isinstance(make_executor("local", 1), SerialExecutor)
+    assert make_executor("local", 3) == LocalExecutor(3)
+    with pytest.raises(ValueError, match="unknown executor"):
+        make_executor("dask", 2)
+    with pytest.raises(ValueError, match="jobs"):
+        make_executor("local", 0)
+
+
+def test_ray_gives_the_same_rows(serial_run, tmp_path) -> None:
+    ray = pytest.importorskip("ray", reason="Ray is optional: pip install -e '.[ray]'")
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        run_dir = tmp_path / "ray"
+        backend = FakeBackend(raise_on=("apple",))
+        run_benchmark(CONFIG, run_dir, backend=backend, executor=RayExecutor(), progress=False)
+    finally:
+        ray.shutdown()
+    assert _rows(run_dir) == _rows(serial_run)
+    assert _rows(run_dir, "rounds") == _rows(serial_run, "rounds")

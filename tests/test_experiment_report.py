@@ -1,0 +1,144 @@
+"""The report: tables and plots from the results files alone, reported beside measured rows."""
+
+from __future__ import annotations
+
+import csv
+import warnings
+from pathlib import Path
+
+import pytest
+
+from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
+from hsqbench.experiment.fake_backend import FakeBackend
+from hsqbench.experiment.report import (
+    GSR_PLOT,
+    OUTCOMES_PLOT,
+    TABLE1_CSV,
+    TABLE2_CSV,
+    TIMES_PLOT,
+    write_report,
+)
+from hsqbench.experiment.runner import run_benchmark
+from hsqbench.experiment.stats import wilson_interval
+
+CONFIG = ExperimentConfig(
+    planners=("hsq", "antipodal"),
+    isolated=IsolatedConfig(objects=("mug", "bowl", "apple"), attempts_per_object=4),
+    packed=PackedConfig(objects=("mug", "bowl", "pear", "banana"), rounds=4, objects_per_round=3),
+)
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("report") / "run"
+    backend = FakeBackend(success={"antipodal": 0.4}, raise_on=("apple",))  # isolated only
+    run_benchmark(CONFIG, path, backend=backend, progress=False)
+    return path
+
+
+def _counts_from_csv(run_dir: Path, experiment: str, planner: str) -> tuple[int, int, int]:
+    """Successes, attempts and error trials counted straight from attempts.csv."""
+    k = n = err = 0
+    with open(run_dir / "attempts.csv") as f:
+        for row in csv.DictReader(f):
+            if row["experiment"] != experiment or row["planner"] != planner:
+                continue
+            if row["status"] == "error":
+                err += 1
+            else:
+                n += 1
+                k += row["success"] == "1"
+    return k, n, err
+
+
+def _cleared_from_csv(run_dir: Path, planner: str) -> tuple[int, int]:
+    cleared = presented = 0
+    with open(run_dir / "rounds.csv") as f:
+        for row in csv.DictReader(f):
+            if row["planner"] == planner and row["status"] == "ok":
+                cleared += int(row["n_cleared"])
+                presented += int(row["n_objects"])
+    return cleared, presented
+
+
+def test_report_from_the_csv_files_alone(run_dir: Path, tmp_path: Path) -> None:
+    only_csv = tmp_path / "copy"
+    only_csv.mkdir()
+    for name in ("attempts.csv", "rounds.csv"):
+        (only_csv / name).write_bytes((run_dir / name).read_bytes())
+    with pytest.warns(UserWarning, match="infrastructure error"):
+        written = write_report(only_csv)
+    names = {p.name for p in written}
+    assert {"tables.md", TABLE1_CSV, TABLE2_CSV, GSR_PLOT, OUTCOMES_PLOT, TIMES_PLOT} <= names
+    md = (only_csv / "tables.md").read_text()
+    assert "backend unknown" in md  # without run.json it does not claim a simulation
+
+
+def test_tables_hold_reported_and_measured_rows_with_intervals(run_dir: Path) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        write_report(run_dir)
+    md = (run_dir / "tables.md").read_text()
+    for reported in ("6-DOF GraspNet | 88.0", "GPD | 47.0", "PointNetGPD | 82.0",
+                     "HSQ (paper) | 96.0", "GIGA | 83.3", "86.6", "HSQ (paper) | 81.3 | — | 81.3"):  # fmt: skip
+        assert reported in md
+    assert md.count("reported, real robot") >= 6 + 1  # six rows and the note
+    assert "measured, fake backend (this run)" in md  # the backend is named, not "simulation"
+    assert "Warning" in md and "infrastructure error" in md
+
+    for planner in CONFIG.planners:
+        k, n, err = _counts_from_csv(run_dir, "isolated", planner)
+        low, high = wilson_interval(k, n)
+        line = next(x for x in md.splitlines() if x.startswith(f"| {planner} |"))
+        assert (
+            f"| {100 * k / n:.1f} | [{100 * low:.1f}, {100 * high:.1f}] | {k}/{n} | {err} |" in line
+        )
+
+        cleared, presented = _cleared_from_csv(run_dir, planner)
+        kp, np_, errp = _counts_from_csv(run_dir, "packed", planner)
+        lo_c, hi_c = wilson_interval(cleared, presented)
+        packed_line = [x for x in md.splitlines() if x.startswith(f"| {planner} |")][1]
+        assert (
+            f"| {100 * cleared / presented:.1f} | [{100 * lo_c:.1f}, {100 * hi_c:.1f}] |"
+            in packed_line
+        )
+        assert f"| {100 * kp / np_:.1f} |" in packed_line
+        assert f"| {errp} | measured" in packed_line
+
+    with open(run_dir / TABLE1_CSV) as f:
+        rows = list(csv.DictReader(f))
+    measured = [r for r in rows if r["source"].startswith("measured")]
+    assert [r["method"] for r in measured] == list(CONFIG.planners)
+    assert all(float(r["ci_low_percent"]) <= float(r["gsr_percent"]) <= float(r["ci_high_percent"])
+               for r in measured)  # fmt: skip
+    with open(run_dir / TABLE2_CSV) as f:
+        t2 = {r["method"]: r for r in csv.DictReader(f)}
+    assert (
+        t2["GIGA"]["source"] == "reported, real robot" and float(t2["GIGA"]["cr_percent"]) == 86.6
+    )
+
+
+def test_plots_are_valid_pngs(run_dir: Path) -> None:
+    from matplotlib.image import imread
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        write_report(run_dir)
+    for name in (GSR_PLOT, OUTCOMES_PLOT, TIMES_PLOT):
+        path = run_dir / name
+        assert path.read_bytes()[:8] == PNG_MAGIC
+        image = imread(path)
+        assert image.ndim == 3 and image.shape[0] > 200 and image.shape[1] > 200
+        assert image.std() > 0.01  # not a blank canvas
+
+
+def test_report_command(run_dir: Path, capsys) -> None:
+    from hsqbench.cli import main
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        assert main(["report", str(run_dir)]) == 0
+    assert "tables.md" in capsys.readouterr().out
+    assert main(["report", str(run_dir / "nope")]) == 2
+    assert "not a folder" in capsys.readouterr().err

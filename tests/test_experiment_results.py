@@ -1,0 +1,174 @@
+"""The append-only results store: row schema, atomic appends, repair after a kill, dedup."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import pytest
+
+from hsqbench.experiment.backend import TrialRun, execute_trial
+from hsqbench.experiment.fake_backend import FakeBackend
+from hsqbench.experiment.results import (
+    ATTEMPT_COLUMNS,
+    ROUND_COLUMNS,
+    ResultsError,
+    ResultStore,
+    load_results,
+    rows_for,
+)
+from hsqbench.experiment.seeds import TrialSpec
+
+ISO = TrialSpec("isolated", "hsq", 0, 2, ("mug",), 1234)
+PACKED = TrialSpec("packed", "hsq", 0, 1, ("mug", "bowl", "apple"), 99)
+
+
+def _run(spec: TrialSpec, **fake) -> TrialRun:
+    return execute_trial(FakeBackend(**fake), spec)
+
+
+def test_isolated_row_carries_the_attempt() -> None:
+    run = _run(ISO)
+    attempt = run.result.attempts[0]
+    rows, round_row = rows_for(run, "abc123", "v1")
+    assert round_row is None and len(rows) == 1
+    row = rows[0]
+    assert list(row) == list(ATTEMPT_COLUMNS)
+    assert row["trial_key"] == "isolated/hsq/s0/mug/002"
+    assert row["seed"] == "1234" and row["objects"] == "mug" and row["status"] == "ok"
+    assert row["outcome"] == str(attempt.outcome)
+    assert row["success"] == ("1" if attempt.success else "0")
+    assert float(row["planning_s"]) == attempt.planning_s  # exact round trip
+    assert float(row["h_gamma"]) == attempt.factors["h_gamma"]
+    assert json.loads(row["factors"]) == attempt.factors
+    assert row["config_hash"] == "abc123" and row["code_version"] == "v1"
+
+
+def test_packed_round_rows() -> None:
+    run = _run(PACKED)
+    rows, round_row = rows_for(run, "h", "v")
+    n = len(run.result.attempts)
+    assert [r["attempt_index"] for r in rows] == [str(i) for i in range(n)]
+    assert all(r["n_attempts"] == str(n) for r in rows)
+    assert list(round_row) == list(ROUND_COLUMNS)
+    assert round_row["n_objects"] == "3"
+    assert round_row["n_cleared"] == str(len(run.result.objects_cleared))
+    assert float(round_row["clearance_rate"]) == run.result.clearance_rate
+
+
+def test_error_rows_are_not_attempts() -> None:
+    run = _run(PACKED, raise_on=("bowl",))
+    assert not run.ok and "RuntimeError" in run.error
+    rows, round_row = rows_for(run, "h", "v")
+    assert len(rows) == 1
+    assert rows[0]["status"] == "error" and rows[0]["success"] == "" and rows[0]["outcome"] == ""
+    assert rows[0]["attempt_index"] == "-1" and "fake backend failure" in rows[0]["detail"]
+    assert round_row["status"] == "error" and round_row["n_cleared"] == ""
+
+
+def test_fields_stay_on_one_line_and_nan_is_empty(tmp_path) -> None:
+    run = TrialRun.failed(ISO, "boom\nsecond line\r\nthird")
+    rows, _ = rows_for(run, "h", "v")
+    assert "\n" not in rows[0]["detail"] and "second line" in rows[0]["detail"]
+    ok = _run(ISO)
+    ok.result.attempts[0].score = math.nan
+    assert rows_for(ok, "h", "v")[0][0]["score"] == ""
+
+
+def _store(tmp_path) -> ResultStore:
+    store = ResultStore(tmp_path / "run")
+    store.prepare()
+    return store
+
+
+def test_append_then_load_and_refuse_a_second_copy(tmp_path) -> None:
+    store = _store(tmp_path)
+    iso, packed = _run(ISO), _run(PACKED)
+    store.append(iso, "h", "v")
+    store.append(packed, "h", "v")
+    results = load_results(store.run_dir)
+    assert results.complete_keys == {ISO.key, PACKED.key}
+    assert len(results.attempts) == 1 + len(packed.result.attempts)
+    assert len(results.rounds) == 1
+    with pytest.raises(ResultsError, match="already recorded"):
+        store.append(iso, "h", "v")
+    # a new store on the same folder knows it too
+    again = ResultStore(store.run_dir)
+    again.prepare()
+    with pytest.raises(ResultsError, match="already recorded"):
+        again.append(iso, "h", "v")
+
+
+def test_partial_tail_and_incomplete_round_are_repaired(tmp_path) -> None:
+    store = _store(tmp_path)
+    store.append(_run(ISO), "h", "v")
+    packed = _run(PACKED)
+    att_rows, _ = rows_for(packed, "h", "v")
+    # A kill between the attempt rows and the round row, then a kill mid-line.
+    with open(store.attempts_path, "a", newline="") as f:
+        csv.DictWriter(f, ATTEMPT_COLUMNS, lineterminator="\n").writerows(att_rows)
+        f.write("isolated/hsq/s0/apple/000,isolated,hs")
+    before = load_results(store.run_dir)
+    assert before.partial_tail and PACKED.key in before.incomplete_keys
+    assert before.complete_keys == {ISO.key}
+
+    fresh = ResultStore(store.run_dir)
+    kept = fresh.prepare()
+    assert kept.complete_keys == {ISO.key}
+    text = store.attempts_path.read_text()
+    assert text.endswith("\n") and "apple" not in text and PACKED.key not in text
+    fresh.append(packed, "h", "v")  # the round runs again and is counted once
+    after = load_results(store.run_dir)
+    assert after.complete_keys == {ISO.key, PACKED.key} and not after.incomplete_keys
+
+
+def test_duplicates_are_counted_once(tmp_path) -> None:
+    store = _store(tmp_path)
+    iso = _run(ISO)
+    store.append(iso, "h", "v")
+    line = store.attempts_path.read_text().splitlines()[1]
+    with open(store.attempts_path, "a") as f:
+        f.write(line + "\n")
+    results = load_results(store.run_dir)
+    assert results.duplicate_keys == {ISO.key}
+    assert len(results.attempts) == 1
+
+
+def test_retry_errors_drops_error_trials_only(tmp_path) -> None:
+    store = _store(tmp_path)
+    store.append(_run(ISO, raise_on=("mug",)), "h", "v")
+    store.append(_run(PACKED), "h", "v")
+    kept = ResultStore(store.run_dir).prepare()
+    assert kept.error_keys == {ISO.key}
+    kept = ResultStore(store.run_dir).prepare(retry_errors=True)
+    assert kept.complete_keys == {PACKED.key} and not kept.error_keys
+
+
+def test_damaged_files_are_clear_errors(tmp_path) -> None:
+    store = _store(tmp_path)
+    store.append(_run(ISO), "h", "v")
+    with open(store.attempts_path, "a") as f:
+        f.write("only,three,fields\n")
+    with pytest.raises(ResultsError, match="malformed row"):
+        load_results(store.run_dir)
+    store.attempts_path.write_text("trial_key,something_else\n")
+    with pytest.raises(ResultsError, match="columns differ"):
+        load_results(store.run_dir)
+
+
+def test_one_writer_per_run_folder(tmp_path) -> None:
+    a, b = ResultStore(tmp_path / "run"), ResultStore(tmp_path / "run")
+    with a.locked(), pytest.raises(ResultsError, match="another hsqbench process"), b.locked():
+        pass
+    with b.locked():  # released
+        pass
+
+
+def test_backend_answering_another_trial_is_an_error() -> None:
+    class WrongSeed(FakeBackend):
+        def run_isolated(self, obj, seed, planner):
+            return super().run_isolated(obj, seed + 1, planner)
+
+    run = execute_trial(WrongSeed(), ISO)
+    assert not run.ok and "another trial" in run.error
