@@ -130,6 +130,7 @@ def _read_ply(path: Path) -> NDArray:
             values = np.array([row.split()[: len(props)] for row in block], dtype=np.float64)
         except ValueError as exc:
             raise CloudFormatError(f"{path}: bad PLY vertex line: {exc}") from None
+        values = values.reshape(-1, len(props)) if count == 0 else values
         if values.shape != (count, len(props)):
             raise CloudFormatError(f"{path}: PLY vertex lines must have {len(props)} values")
         return values[:, [names.index(axis) for axis in "xyz"]]

@@ -1,0 +1,140 @@
+"""``hsqbench plan``: reads every cloud format, prints and writes grasps, refuses bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from hsqbench.cli import main
+from hsqbench.cloud_io import write_cloud
+from hsqbench.planner.api import PlanningContext, PlanResult
+from hsqbench.planner.grasp import Grasp
+from hsqbench.planner.registry import register_planner
+from tests.shapes import Box, union_cloud, visible_mask
+
+
+class CentroidPlanner:
+    """A stand-in planner: one top-down grasp at the centroid, remembering what it was given."""
+
+    name = "test-centroid"
+    seen: list[tuple[np.ndarray, PlanningContext]] = []  # noqa: RUF012
+
+    def plan(self, points, context) -> PlanResult:
+        CentroidPlanner.seen.append((np.asarray(points), context))
+        if len(points) < 10:
+            return PlanResult(grasps=[], reason="fewer than 10 points", planner=self.name)
+        rotation = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
+        grasp = Grasp(np.mean(points, axis=0), rotation, 0.03, 0.5, {"h_alpha": 0.5})
+        return PlanResult(grasps=[grasp], planner=self.name)
+
+
+register_planner("test-centroid", lambda config=None: CentroidPlanner(), replace=True)
+
+
+def box_cloud(seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    box = Box((0.03, 0.02, 0.05), center=np.array([0.0, 0.0, 0.05]))
+    cloud = union_cloud((box,), 0.003, rng)
+    mask = np.zeros(len(cloud.points), dtype=bool)
+    for camera in ([-0.45, -0.45, 0.55], [0.45, 0.45, 0.55]):
+        mask |= visible_mask(cloud.points, cloud.normals, np.array(camera))
+    return cloud.points[mask] + rng.normal(scale=0.001, size=(mask.sum(), 3))
+
+
+@pytest.mark.parametrize(
+    ("suffix", "binary"),
+    [
+        (".ply", True),
+        (".ply", False),
+        (".pcd", True),
+        (".pcd", False),
+        (".npy", True),
+        (".xyz", False),
+    ],
+)
+def test_reads_each_format(tmp_path, capsys, suffix, binary) -> None:
+    points = box_cloud()
+    path = write_cloud(tmp_path / f"cloud{suffix}", points, binary=binary)
+    CentroidPlanner.seen.clear()
+    code = main(
+        [
+            "plan",
+            str(path),
+            "--planner",
+            "test-centroid",
+            "--support-plane",
+            "0",
+            "0",
+            "2",
+            "0",
+            "--seed",
+            "3",
+            "--packed",
+        ]
+    )
+    assert code == 0
+    given, context = CentroidPlanner.seen[-1]
+    np.testing.assert_allclose(given, points, atol=1e-9)  # .xyz keeps 9 digits: nanometres
+    assert context.support_plane == pytest.approx((0, 0, 1, 0)) and context.seed == 3
+    assert context.packed
+    out = capsys.readouterr().out
+    assert f"{len(points)} points" in out and "1 grasps" in out
+
+
+def test_hsq_plan_prints_a_table_and_writes_json(tmp_path, capsys) -> None:
+    path = write_cloud(tmp_path / "box.npy", box_cloud(1))
+    out_json = tmp_path / "out" / "plan.json"
+    code = main(
+        [
+            "plan",
+            str(path),
+            "--top",
+            "3",
+            "--json",
+            str(out_json),
+            "--support-plane",
+            "0",
+            "0",
+            "1",
+            "0",
+        ]
+    )
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "rank" in out and "score" in out and "candidates: synthesised" in out
+    data = json.loads(out_json.read_text())
+    assert 1 <= len(data["grasps"]) <= 3 and data["n_grasps"] >= len(data["grasps"])
+    scores = [g["score"] for g in data["grasps"]]
+    assert scores == sorted(scores, reverse=True)
+    top = Grasp.from_dict(data["grasps"][0])
+    assert top.width < 0.08 and data["input"]["support_plane"] == [0.0, 0.0, 1.0, 0.0]
+    assert data["remaining"]["synthesised"] > 0 and "recovery" in data["timings"]
+
+
+@pytest.mark.parametrize(
+    ("content", "name", "needle"),
+    [
+        (b"", "empty.ply", "not a PLY"),
+        (b"1 2 3\nnan 1 1\n", "bad.xyz", "NaN or inf"),
+        (b"# nothing here\n", "blank.xyz", "no points"),
+        (b"v 1 2 3\n", "mesh.obj", "unknown cloud format"),
+    ],
+)
+def test_bad_files_exit_nonzero_with_a_message(tmp_path, capsys, content, name, needle) -> None:
+    path = tmp_path / name
+    path.write_bytes(content)
+    assert main(["plan", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "hsqbench plan: error:" in err and needle in err
+
+
+def test_missing_file_unknown_planner_and_no_grasp(tmp_path, capsys) -> None:
+    assert main(["plan", str(tmp_path / "missing.npy")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    path = write_cloud(tmp_path / "few.npy", np.zeros((4, 3)) + np.arange(4)[:, None])
+    assert main(["plan", str(path), "--planner", "nope"]) == 2
+    assert "choose one of" in capsys.readouterr().err
+    assert main(["plan", str(path), "--planner", "test-centroid"]) == 1
+    assert "no grasp: fewer than 10 points" in capsys.readouterr().out
