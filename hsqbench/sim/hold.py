@@ -77,6 +77,144 @@ def load_hold_config(path: str | Path | None = "hold") -> HoldConfig:
     return load_config(HoldConfig, path)
 
 
+@dataclass(frozen=True)
+class FinderConfig:
+    """Search for a top-down test grasp (:func:`find_top_down_grasp`); lengths in metres.
+
+    Attributes:
+        spacing_m: surface sampling and position grid spacing.
+        yaw_steps: closing-axis angles tried in [0, pi).
+        max_width_m: widest object slice the hand may close on (opening 0.08 less a margin).
+        pad_half_m: half size of the pad region (across and along the fingers).
+        finger_len_m: finger length above the grasp centre that must clear the object.
+        finger_thick_m: finger thickness outside the contact faces.
+        palm_clearance_m: height of the palm above the grasp centre.
+        min_height_m: lowest grasp centre above the base (fingertips clear the table).
+        max_face_tilt_m: how far the slice's ends may differ across the pad (contact faces
+            square to the closing axis, so the squeeze does not push the object sideways).
+    """
+
+    spacing_m: float = 0.004
+    yaw_steps: int = 8
+    max_width_m: float = 0.074
+    pad_half_m: float = 0.0085
+    finger_len_m: float = 0.045
+    finger_thick_m: float = 0.012
+    palm_clearance_m: float = 0.035
+    min_height_m: float = 0.02
+    max_face_tilt_m: float = 0.002
+
+
+def find_top_down_grasp(obj: ObjectLike, finder: FinderConfig | None = None) -> GraspSpec:
+    """A top-down grasp on ``obj`` for the hold test, from its collision hulls.
+
+    Candidates: a grid of grasp centres (x, y, z) and closing-axis yaws. The object's surface
+    samples within the pad region (|across| and |vertical| below ``pad_half_m``) form the slice
+    the pads close on; a candidate is kept when that slice is narrower than ``max_width_m``,
+    nothing else of the object lies in the fingers' path (the columns beside the slice up to the
+    open width, from the pads up to ``finger_len_m``) or under the palm, and the fingertips clear
+    the table. The grasp is centred on its slice; the one closest to the centre of mass wins.
+
+    Raises:
+        ValueError: when no candidate passes (the object does not fit the hand from above).
+    """
+    import trimesh
+
+    f = finder or FinderConfig()
+    hulls = [trimesh.load(p, force="mesh") for p in obj.collision_meshes]
+    pts = _solid_points(hulls, f.spacing_m)
+    ext = np.asarray(obj.extents)
+    gx = np.arange(-ext[0] / 2, ext[0] / 2 + 1e-9, 2 * f.spacing_m)
+    gy = np.arange(-ext[1] / 2, ext[1] / 2 + 1e-9, 2 * f.spacing_m)
+    gz = np.arange(f.min_height_m, ext[2] - f.pad_half_m / 2, 2 * f.spacing_m)
+    best: tuple[float, GraspSpec] | None = None
+    com = np.asarray(obj.com)
+    half_open = 0.04  # the fingers start fully open (Franka Hand: 40 mm travel each)
+    for yaw in np.arange(f.yaw_steps) * np.pi / f.yaw_steps:
+        c = np.array([np.cos(yaw), np.sin(yaw)])
+        perp = np.array([-c[1], c[0]])
+        u_all = pts[:, :2] @ c
+        v_all = pts[:, :2] @ perp
+        for v0 in np.unique(np.round(np.add.outer(gx * perp[0], gy * perp[1]).ravel(), 4)):
+            near = np.abs(v_all - v0) < 0.05  # under the palm's footprint
+            u_n, v_n, z_n = u_all[near], v_all[near] - v0, pts[near, 2]
+            strip = np.abs(v_n) < f.pad_half_m
+            u_s, v_s, z_s = u_n[strip], v_n[strip], z_n[strip]
+            for z in gz:
+                w = z_s - z
+                slab = np.abs(w) < f.pad_half_m
+                if slab.sum() < 3:
+                    continue
+                for umin, umax in _clusters(np.sort(u_s[slab]), f.spacing_m * 1.5):
+                    width = umax - umin
+                    if width > f.max_width_m:
+                        continue
+                    uc = 0.5 * (umin + umax)
+                    grasped = slab & (u_s >= umin) & (u_s <= umax)
+                    if not _faces_square(u_s[grasped] - uc, v_s[grasped], f.max_face_tilt_m):
+                        continue
+                    du = np.abs(u_s - uc)
+                    in_finger_path = (
+                        (w > -f.pad_half_m)
+                        & (w < f.finger_len_m)
+                        & (du > width / 2 + f.spacing_m)
+                        & (du < half_open + f.finger_thick_m)
+                    )
+                    under_palm = (z_n - z >= f.palm_clearance_m) & (np.abs(u_n - uc) < 0.11)
+                    if in_finger_path.any() or under_palm.any():
+                        continue
+                    centre = uc * c + v0 * perp
+                    cost = float(np.linalg.norm(np.array([*centre, z]) - com))
+                    if best is None or cost < best[0]:
+                        grasp = GraspSpec(
+                            float(yaw), float(z), (float(centre[0]), float(centre[1]))
+                        )
+                        best = (cost, grasp)
+    if best is None:
+        raise ValueError(f"{obj.name}: no top-down grasp fits the hand (extents {ext.round(3)} m)")
+    return best[1]
+
+
+def _solid_points(hulls: list, spacing: float) -> np.ndarray:
+    """Points filling the union of convex hulls: a grid kept by the half-space test, plus
+    surface samples so thin walls are not missed."""
+    import trimesh
+
+    lo = np.min([h.bounds[0] for h in hulls], axis=0)
+    hi = np.max([h.bounds[1] for h in hulls], axis=0)
+    axes = [np.arange(a, b + spacing, spacing) for a, b in zip(lo, hi, strict=True)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    inside = np.zeros(len(grid), dtype=bool)
+    for h in hulls:
+        normals = h.face_normals
+        offsets = np.einsum("ij,ij->i", normals, h.triangles[:, 0])
+        inside |= np.all(grid @ normals.T <= offsets + 1e-9, axis=1)
+    surface = [
+        trimesh.sample.sample_surface_even(h, max(50, int(h.area / spacing**2)), seed=0)[0]
+        for h in hulls
+    ]
+    return np.concatenate([grid[inside], *surface, *(h.vertices for h in hulls)])
+
+
+def _faces_square(u: np.ndarray, v: np.ndarray, tol: float) -> bool:
+    """Whether the grasped slice ends in faces square to the closing axis: its outermost points
+    on the two sides of the strip's middle line differ by less than ``tol`` at each end."""
+    left, right = v < 0, v >= 0
+    if left.sum() == 0 or right.sum() == 0:
+        return False
+    return bool(
+        abs(u[left].min() - u[right].min()) < tol and abs(u[left].max() - u[right].max()) < tol
+    )
+
+
+def _clusters(u_sorted: np.ndarray, gap: float) -> list[tuple[float, float]]:
+    """Runs of sorted values whose consecutive gaps are below ``gap``: (first, last) each."""
+    breaks = np.flatnonzero(np.diff(u_sorted) > gap)
+    starts = np.concatenate([[0], breaks + 1])
+    ends = np.concatenate([breaks, [len(u_sorted) - 1]])
+    return [(float(u_sorted[a]), float(u_sorted[b])) for a, b in zip(starts, ends, strict=True)]
+
+
 def _hand_pose(grasp: GraspSpec, tcp_offset_m: float) -> tuple[np.ndarray, np.ndarray]:
     """World pose (pos, quat) of the hand body for a top-down grasp (approach = -z)."""
     c, s = np.cos(grasp.yaw_rad), np.sin(grasp.yaw_rad)

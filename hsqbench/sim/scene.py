@@ -1,0 +1,596 @@
+"""Benchmark scenes: a table, the Panda at its back edge, a bin, two depth cameras and objects.
+
+World frame = the Panda's base frame: origin at the base on the table top, x forward over the
+table, y to the robot's left, z up. The table top is the plane z = 0. Static parts come from
+``configs/scene.yaml``; the robot from :mod:`hsqbench.sim.robot`; the physics options from
+:mod:`hsqbench.sim.physics`.
+
+Kinds:
+
+- ``isolated``: one object, upright in its canonical pose with a random yaw, at a random position
+  whose footprint lies inside the workspace.
+- ``packed``: ``n_packed`` different objects, each upright with a random yaw, placed by rejection
+  sampling so that no two footprints (rotated bounding rectangles grown by the margin) overlap.
+
+Both are then settled (simulated with the arm holding its home pose) and the rest state is stored
+as the keyframe ``initial``. Everything random comes from ``np.random.default_rng(seed)``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from hsqbench.config import load_config
+from hsqbench.sim.objects import ObjectLike, add_object_body, resolve_object
+from hsqbench.sim.physics import PhysicsConfig, apply_physics, load_physics_config
+from hsqbench.sim.robot import Panda, RobotConfig, load_panda_spec, load_robot_config
+
+KINDS = ("isolated", "packed")
+INITIAL_KEY = "initial"
+OBJECT_PREFIX = "obj/"
+
+
+@dataclass(frozen=True)
+class TableConfig:
+    size_m: tuple[float, float, float] = (1.2, 1.6, 0.04)
+    centre_xy_m: tuple[float, float] = (0.35, 0.0)
+    height_m: float = 0.75
+    rgba: tuple[float, float, float, float] = (0.62, 0.5, 0.38, 1.0)
+
+
+@dataclass(frozen=True)
+class WorkspaceConfig:
+    centre_xy_m: tuple[float, float] = (0.5, 0.0)
+    size_m: tuple[float, float] = (0.36, 0.5)
+    height_m: float = 0.3
+
+
+@dataclass(frozen=True)
+class BinConfig:
+    centre_xy_m: tuple[float, float] = (0.15, -0.5)
+    outer_size_m: tuple[float, float, float] = (0.3, 0.36, 0.14)
+    wall_m: float = 0.01
+    rgba: tuple[float, float, float, float] = (0.25, 0.45, 0.7, 1.0)
+
+
+@dataclass(frozen=True)
+class CameraPose:
+    name: str
+    pos_m: tuple[float, float, float]
+    target_m: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class DepthCameraConfig:
+    width_px: int = 640
+    height_px: int = 576
+    fovy_deg: float = 65.0
+    min_range_m: float = 0.5
+    max_range_m: float = 3.86
+    poses: tuple[CameraPose, ...] = ()
+
+
+@dataclass(frozen=True)
+class ViewerCameraConfig:
+    name: str = "viewer"
+    pos_m: tuple[float, float, float] = (1.45, 0.75, 0.85)
+    target_m: tuple[float, float, float] = (0.35, -0.05, 0.05)
+    fovy_deg: float = 45.0
+    width_px: int = 1280
+    height_px: int = 960
+
+
+@dataclass(frozen=True)
+class PlacementConfig:
+    n_packed: int = 5
+    margin_m: float = 0.02
+    max_tries_per_object: int = 300
+    max_scene_attempts: int = 20
+    drop_height_m: float = 0.002
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """``configs/scene.yaml``; see the comments there for every value's reason."""
+
+    table: TableConfig = field(default_factory=TableConfig)
+    workspace: WorkspaceConfig = field(default_factory=WorkspaceConfig)
+    bin: BinConfig = field(default_factory=BinConfig)
+    depth_cameras: DepthCameraConfig = field(default_factory=DepthCameraConfig)
+    viewer_camera: ViewerCameraConfig = field(default_factory=ViewerCameraConfig)
+    placement: PlacementConfig = field(default_factory=PlacementConfig)
+
+
+def load_scene_config(path: str | Path | None = "scene") -> SceneConfig:
+    """Load ``configs/scene.yaml`` (or another file); ``None`` gives the built-in defaults."""
+    return load_config(SceneConfig, path)
+
+
+@dataclass(frozen=True)
+class DepthCamera:
+    """A depth camera of the scene: MuJoCo camera name, image size, field of view and range."""
+
+    name: str
+    width_px: int
+    height_px: int
+    fovy_deg: float
+    min_range_m: float
+    max_range_m: float
+
+
+@dataclass
+class SceneInfo:
+    """What a built scene contains. Lengths in metres, world frame (= robot base frame).
+
+    Attributes:
+        kind, seed: how the scene was drawn.
+        objects: names of the placed objects, in draw order.
+        object_bodies: object name -> body name; ``object_body_ids``: -> body id.
+        object_geom_ids: object name -> ids of its collision geoms.
+        initial_poses: object name -> (7,) settled pose (x, y, z, qw, qx, qy, qz).
+        depth_cameras: the two depth cameras; ``viewer_camera``: camera name for pictures.
+        table_top_z: height of the table top; ``support_plane``: (a, b, c, d) with
+            a x + b y + c z + d = 0 on the table top and (a, b, c) pointing up.
+        table_geom_id: the table top's geom id.
+        workspace_min, workspace_max: (3,) corners of the placement region (z from the table top).
+        bin_min, bin_max: (3,) corners of the bin's inside; ``bin_geom_ids``: its geoms.
+        robot_prefix, arm_joints, arm_actuators, finger_joints, gripper_actuator, tcp_site,
+            hand_body: names of the robot's elements (see :class:`hsqbench.sim.robot.Panda`).
+        initial_key: keyframe name of the settled state (``mj_resetDataKeyframe``).
+        settle_time_s: simulated time the settling took; ``max_speed_after_settle``: largest
+            object speed (m/s or rad/s) at its end.
+        build_time_s: wall-clock time of :func:`build_scene`.
+    """
+
+    kind: str
+    seed: int
+    objects: list[str]
+    object_bodies: dict[str, str]
+    object_body_ids: dict[str, int]
+    object_geom_ids: dict[str, np.ndarray]
+    initial_poses: dict[str, np.ndarray]
+    depth_cameras: tuple[DepthCamera, ...]
+    viewer_camera: str
+    table_top_z: float
+    support_plane: np.ndarray
+    table_geom_id: int
+    workspace_min: np.ndarray
+    workspace_max: np.ndarray
+    bin_min: np.ndarray
+    bin_max: np.ndarray
+    bin_geom_ids: np.ndarray
+    robot_prefix: str
+    arm_joints: tuple[str, ...]
+    arm_actuators: tuple[str, ...]
+    finger_joints: tuple[str, ...]
+    gripper_actuator: str
+    tcp_site: str
+    hand_body: str
+    initial_key: str = INITIAL_KEY
+    settle_time_s: float = 0.0
+    max_speed_after_settle: float = 0.0
+    build_time_s: float = 0.0
+
+    @property
+    def camera_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.depth_cameras)
+
+    def reset(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Return ``data`` to the settled initial state."""
+        mujoco.mj_resetDataKeyframe(model, data, model.key(self.initial_key).id)
+        mujoco.mj_forward(model, data)
+
+
+# ---- placement ---------------------------------------------------------------------------------
+
+
+def footprint_corners(extents_xy: np.ndarray, xy: np.ndarray, yaw: float) -> np.ndarray:
+    """(4, 2) corners of an object's bounding rectangle (centred on the object frame origin,
+    as the asset frame is) after a yaw rotation and a translation."""
+    hx, hy = 0.5 * np.asarray(extents_xy, dtype=float)
+    local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+    c, s = np.cos(yaw), np.sin(yaw)
+    return local @ np.array([[c, s], [-s, c]]) + np.asarray(xy, dtype=float)
+
+
+def rectangles_overlap(a: np.ndarray, b: np.ndarray, gap: float) -> bool:
+    """Whether two convex quadrilaterals (4, 2) come closer than ``gap`` (separating axes).
+
+    Each rectangle's edge normals are the candidate axes; the shapes are at least ``gap`` apart
+    along an axis when the projections' intervals are separated by ``gap``. For rectangles the
+    projection test on their four edge normals is exact for overlap; with ``gap`` > 0 it is
+    conservative near corners (it may report a corner-to-corner pair as closer than it is).
+    """
+    axes = []
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        normals = np.stack([-edges[:, 1], edges[:, 0]], axis=1)
+        axes.append(normals[:2] / np.linalg.norm(normals[:2], axis=1, keepdims=True))
+    axes = np.concatenate(axes)
+    pa, pb = a @ axes.T, b @ axes.T
+    separated = (pa.min(axis=0) >= pb.max(axis=0) + gap) | (pb.min(axis=0) >= pa.max(axis=0) + gap)
+    return not bool(separated.any())
+
+
+def _inside(corners: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+    return bool(np.all(corners >= lo) and np.all(corners <= hi))
+
+
+def place_objects(
+    extents_xy: Sequence[np.ndarray],
+    names: Sequence[str],
+    workspace_lo: np.ndarray,
+    workspace_hi: np.ndarray,
+    placement: PlacementConfig,
+    rng: np.random.Generator,
+) -> list[tuple[np.ndarray, float]]:
+    """Positions (x, y) and yaws (rad) of footprints that lie inside the workspace and keep
+    ``margin_m`` from each other. Larger footprints are placed first.
+
+    Raises:
+        ValueError: when an object cannot fit the workspace at any yaw, or no layout was found
+            within the configured tries (names the objects and the areas involved).
+    """
+    ext = [np.asarray(e, dtype=float) for e in extents_xy]
+    size = workspace_hi - workspace_lo
+    for name, e in zip(names, ext, strict=True):
+        if min(e) > min(size) or max(e) > np.hypot(*size):
+            raise ValueError(
+                f"object {name!r} (footprint {e[0]:.3f} x {e[1]:.3f} m) cannot fit the "
+                f"{size[0]:.2f} x {size[1]:.2f} m workspace; enlarge workspace.size_m in scene.yaml"
+            )
+    order = np.argsort([-e[0] * e[1] for e in ext], kind="stable")
+    for _ in range(placement.max_scene_attempts):
+        placed: dict[int, tuple[np.ndarray, float, np.ndarray]] = {}
+        for i in order:
+            for _ in range(placement.max_tries_per_object):
+                yaw = float(rng.uniform(-np.pi, np.pi))
+                xy = rng.uniform(workspace_lo, workspace_hi)
+                corners = footprint_corners(ext[i], xy, yaw)
+                if not _inside(corners, workspace_lo, workspace_hi):
+                    continue
+                if any(
+                    rectangles_overlap(corners, other, placement.margin_m)
+                    for _, _, other in placed.values()
+                ):
+                    continue
+                placed[int(i)] = (xy, yaw, corners)
+                break
+            else:
+                break
+        if len(placed) == len(ext):
+            return [(placed[i][0], placed[i][1]) for i in range(len(ext))]
+    area = sum(float(e[0] * e[1]) for e in ext)
+    raise ValueError(
+        f"could not place {list(names)} without contact in the {size[0]:.2f} x {size[1]:.2f} m "
+        f"workspace after {placement.max_scene_attempts} attempts (footprints cover "
+        f"{area:.3f} m^2 of {size[0] * size[1]:.3f} m^2 before the {placement.margin_m} m margin); "
+        "choose fewer or smaller objects, or enlarge the workspace"
+    )
+
+
+# ---- composition -------------------------------------------------------------------------------
+
+
+def _look_at_quat(pos: np.ndarray, target: np.ndarray) -> list[float]:
+    """Quaternion of a MuJoCo camera at ``pos`` looking at ``target`` (camera -z forward, +y up)."""
+    forward = np.asarray(target, float) - np.asarray(pos, float)
+    forward /= np.linalg.norm(forward)
+    z = -forward
+    x = np.cross([0.0, 0.0, 1.0], z)
+    if np.linalg.norm(x) < 1e-9:
+        raise ValueError(f"camera at {pos} looks straight up or down: give it a tilt")
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.column_stack([x, y, z]).reshape(-1))
+    return quat.tolist()
+
+
+def _add_static(spec: mujoco.MjSpec, cfg: SceneConfig, physics: PhysicsConfig) -> None:
+    """Floor, table, bin, lights and cameras."""
+    world = spec.worldbody
+    t = cfg.table
+    spec.add_texture(
+        name="floor",
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+        rgb1=[0.32, 0.34, 0.36],
+        rgb2=[0.28, 0.30, 0.32],
+        width=512,
+        height=512,
+    )
+    floor_mat = spec.add_material(name="floor", texrepeat=[6.0, 6.0], reflectance=0.05)
+    floor_mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
+    world.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        pos=[t.centre_xy_m[0], t.centre_xy_m[1], -t.height_m],
+        size=[3.0, 3.0, 0.05],
+        material="floor",
+    )
+    sx, sy, sz = t.size_m
+    top = world.add_geom(
+        name="table",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        pos=[t.centre_xy_m[0], t.centre_xy_m[1], -sz / 2],
+        size=[sx / 2, sy / 2, sz / 2],
+        rgba=list(t.rgba),
+    )
+    physics.table.apply(top)
+    leg = 0.03
+    for ix in (-1, 1):
+        for iy in (-1, 1):
+            world.add_geom(
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                pos=[
+                    t.centre_xy_m[0] + ix * (sx / 2 - 2 * leg),
+                    t.centre_xy_m[1] + iy * (sy / 2 - 2 * leg),
+                    -(t.height_m + sz) / 2,
+                ],
+                size=[leg, leg, (t.height_m - sz) / 2],
+                rgba=[0.3, 0.3, 0.3, 1.0],
+                contype=0,
+                conaffinity=0,
+                group=1,
+            )
+    b = cfg.bin
+    bx, by, bz = (s / 2 for s in b.outer_size_m)
+    w = b.wall_m / 2
+    cx, cy = b.centre_xy_m
+    parts = {
+        "bin/bottom": ([cx, cy, w], [bx, by, w]),
+        "bin/wall_x-": ([cx - bx + w, cy, bz], [w, by, bz]),
+        "bin/wall_x+": ([cx + bx - w, cy, bz], [w, by, bz]),
+        "bin/wall_y-": ([cx, cy - by + w, bz], [bx, w, bz]),
+        "bin/wall_y+": ([cx, cy + by - w, bz], [bx, w, bz]),
+    }
+    for name, (pos, size) in parts.items():
+        geom = world.add_geom(
+            name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=pos, size=size, rgba=list(b.rgba)
+        )
+        physics.table.apply(geom)
+
+    spec.visual.headlight.ambient = [0.25, 0.25, 0.25]
+    spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
+    spec.visual.headlight.specular = [0.05, 0.05, 0.05]
+    ws = cfg.workspace.centre_xy_m
+    world.add_light(
+        name="key",
+        pos=[ws[0] + 0.6, ws[1] + 0.8, 2.0],
+        dir=list(-np.array([0.6, 0.8, 2.0]) / np.linalg.norm([0.6, 0.8, 2.0])),
+        diffuse=[0.6, 0.6, 0.6],
+        castshadow=True,
+        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+    )
+    world.add_light(
+        name="fill",
+        pos=[ws[0] - 0.5, ws[1] - 1.0, 1.5],
+        dir=list(-np.array([-0.5, -1.0, 1.5]) / np.linalg.norm([-0.5, -1.0, 1.5])),
+        diffuse=[0.25, 0.25, 0.25],
+        castshadow=False,
+        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+    )
+
+    dc = cfg.depth_cameras
+    for pose in dc.poses:
+        world.add_camera(
+            name=pose.name,
+            pos=list(pose.pos_m),
+            quat=_look_at_quat(np.array(pose.pos_m), np.array(pose.target_m)),
+            fovy=dc.fovy_deg,
+            resolution=[dc.width_px, dc.height_px],
+        )
+    v = cfg.viewer_camera
+    world.add_camera(
+        name=v.name,
+        pos=list(v.pos_m),
+        quat=_look_at_quat(np.array(v.pos_m), np.array(v.target_m)),
+        fovy=v.fovy_deg,
+        resolution=[v.width_px, v.height_px],
+    )
+    spec.visual.global_.offwidth = max([v.width_px, dc.width_px])
+    spec.visual.global_.offheight = max([v.height_px, dc.height_px])
+    spec.visual.quality.shadowsize = 4096
+    # Near clip 1 cm, far 10 m (values are fractions of the model extent, set after compile).
+    spec.visual.map.znear = 0.005
+    spec.visual.map.zfar = 5.0
+
+
+def _draw_objects(
+    kind: str, objects: Sequence[str | ObjectLike] | str | ObjectLike | None, n_packed: int, rng
+) -> list[ObjectLike]:
+    from hsqbench.assets.library import ycb_names
+
+    if kind not in KINDS:
+        raise ValueError(f"unknown scene kind {kind!r}; known: {list(KINDS)}")
+    if objects is None:
+        pool = ycb_names()
+        count = 1 if kind == "isolated" else n_packed
+        if count > len(pool):
+            raise ValueError(f"cannot draw {count} different objects from {len(pool)}: {pool}")
+        chosen: list[str | ObjectLike] = [pool[i] for i in rng.choice(len(pool), count, False)]
+    elif isinstance(objects, str) or not isinstance(objects, Sequence):
+        chosen = [objects]
+    else:
+        chosen = list(objects)
+    if kind == "isolated" and len(chosen) != 1:
+        raise ValueError(f"an isolated scene has one object, got {len(chosen)}")
+    if not chosen:
+        raise ValueError("a packed scene needs at least one object")
+    assets = [resolve_object(o) for o in chosen]
+    names = [a.name for a in assets]
+    if len(set(names)) != len(names):
+        raise ValueError(f"objects must be different, got {names}")
+    return assets
+
+
+def compose_scene(
+    assets: Sequence[ObjectLike],
+    poses: Sequence[tuple[np.ndarray, float]],
+    cfg: SceneConfig,
+    robot: RobotConfig,
+    physics: PhysicsConfig,
+) -> mujoco.MjSpec:
+    """The scene spec: static parts, the robot at the origin, objects at (xy, yaw)."""
+    spec = mujoco.MjSpec()
+    spec.modelname = "hsqbench_scene"
+    apply_physics(spec, physics)
+    _add_static(spec, cfg, physics)
+    spec.attach(load_panda_spec(robot), prefix=robot.prefix, frame=spec.worldbody.add_frame())
+    z = cfg.placement.drop_height_m
+    for asset, (xy, yaw) in zip(assets, poses, strict=True):
+        quat = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
+        add_object_body(
+            spec.worldbody,
+            spec,
+            asset,
+            OBJECT_PREFIX + asset.name,
+            np.array([xy[0], xy[1], z]),
+            np.array(quat),
+            physics.objects,
+        )
+    return spec
+
+
+def settle(
+    model: mujoco.MjModel, data: mujoco.MjData, body_ids: np.ndarray, physics: PhysicsConfig
+) -> tuple[float, float]:
+    """Step until every body in ``body_ids`` moves slower than ``settle_speed_mps`` (checked
+    after a 0.1 s minimum), or ``settle_time_s`` has passed. Returns (time taken, max speed)."""
+    dt = model.opt.timestep
+    n_max = max(1, round(physics.settle_time_s / dt))
+    n_min = min(n_max, round(0.1 / dt))
+    check_every = max(1, round(0.02 / dt))
+    speed = 0.0
+    for i in range(1, n_max + 1):
+        mujoco.mj_step(model, data)
+        if not np.all(np.isfinite(data.qacc)):
+            raise RuntimeError("simulation diverged while settling the scene")
+        if i >= n_min and i % check_every == 0:
+            speed = float(np.abs(data.cvel[body_ids]).max()) if len(body_ids) else 0.0
+            if speed < physics.settle_speed_mps:
+                return i * dt, speed
+    speed = float(np.abs(data.cvel[body_ids]).max()) if len(body_ids) else 0.0
+    return n_max * dt, speed
+
+
+def build_scene(
+    kind: str,
+    objects: Sequence[str | ObjectLike] | str | ObjectLike | None = None,
+    seed: int = 0,
+    *,
+    scene_config: SceneConfig | None = None,
+    robot_config: RobotConfig | None = None,
+    physics_config: PhysicsConfig | None = None,
+) -> tuple[mujoco.MjModel, mujoco.MjData, SceneInfo]:
+    """Build, settle and describe a scene.
+
+    Args:
+        kind: ``"isolated"`` or ``"packed"``.
+        objects: object names (library) or objects; ``None`` draws by seed from the 15 YCB
+            objects (one for isolated, ``n_packed`` different ones for packed).
+        seed: the only source of randomness; the same seed gives the same scene.
+
+    Returns:
+        ``(model, data, info)`` with ``data`` at the settled state (also keyframe ``initial``).
+
+    Raises:
+        ValueError: unknown kind or object (the library lists the known names), duplicate
+            objects, or a layout that cannot be placed.
+    """
+    t0 = time.perf_counter()
+    cfg = scene_config or load_scene_config()
+    robot = robot_config or load_robot_config()
+    physics = physics_config or load_physics_config()
+    rng = np.random.default_rng(seed)
+    assets = _draw_objects(kind, objects, cfg.placement.n_packed, rng)
+    ws = cfg.workspace
+    lo = np.asarray(ws.centre_xy_m) - np.asarray(ws.size_m) / 2
+    hi = np.asarray(ws.centre_xy_m) + np.asarray(ws.size_m) / 2
+    poses = place_objects(
+        [a.extents[:2] for a in assets], [a.name for a in assets], lo, hi, cfg.placement, rng
+    )
+    spec = compose_scene(assets, poses, cfg, robot, physics)
+    spec.add_key(name=INITIAL_KEY)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    panda = Panda(model, robot.prefix)
+    panda.reset_home(data)
+    mujoco.mj_forward(model, data)
+
+    names = [a.name for a in assets]
+    bodies = {n: OBJECT_PREFIX + n for n in names}
+    body_ids = {n: model.body(b).id for n, b in bodies.items()}
+    settle_s, speed = settle(model, data, np.array(list(body_ids.values())), physics)
+    key = model.key(INITIAL_KEY).id
+    model.key_qpos[key] = data.qpos
+    model.key_qvel[key] = 0.0
+    model.key_ctrl[key] = data.ctrl
+    model.key_time[key] = 0.0
+    info = _describe(model, data, cfg, robot, kind, seed, names, bodies, body_ids, panda)
+    info.settle_time_s, info.max_speed_after_settle = settle_s, speed
+    info.reset(model, data)
+    info.build_time_s = time.perf_counter() - t0
+    return model, data, info
+
+
+def _describe(model, data, cfg, robot, kind, seed, names, bodies, body_ids, panda) -> SceneInfo:
+    geom_ids = {
+        n: np.flatnonzero((model.geom_bodyid == b) & (model.geom_contype > 0))
+        for n, b in body_ids.items()
+    }
+    poses = {}
+    for n, b in body_ids.items():
+        adr = model.jnt_qposadr[model.body_jntadr[b]]
+        poses[n] = data.qpos[adr : adr + 7].copy()
+    dc = cfg.depth_cameras
+    cams = tuple(
+        DepthCamera(p.name, dc.width_px, dc.height_px, dc.fovy_deg, dc.min_range_m, dc.max_range_m)
+        for p in dc.poses
+    )
+    ws = cfg.workspace
+    ws_lo = np.array([*(np.asarray(ws.centre_xy_m) - np.asarray(ws.size_m) / 2), 0.0])
+    ws_hi = np.array([*(np.asarray(ws.centre_xy_m) + np.asarray(ws.size_m) / 2), ws.height_m])
+    b = cfg.bin
+    half = np.asarray(b.outer_size_m[:2]) / 2 - b.wall_m
+    bin_lo = np.array([*(np.asarray(b.centre_xy_m) - half), b.wall_m])
+    bin_hi = np.array([*(np.asarray(b.centre_xy_m) + half), b.outer_size_m[2]])
+    bin_ids = np.array(
+        [
+            model.geom(n).id
+            for n in (f"bin/{p}" for p in ("bottom", "wall_x-", "wall_x+", "wall_y-", "wall_y+"))
+        ]
+    )
+    return SceneInfo(
+        kind=kind,
+        seed=seed,
+        objects=list(names),
+        object_bodies=bodies,
+        object_body_ids=body_ids,
+        object_geom_ids=geom_ids,
+        initial_poses=poses,
+        depth_cameras=cams,
+        viewer_camera=cfg.viewer_camera.name,
+        table_top_z=0.0,
+        support_plane=np.array([0.0, 0.0, 1.0, 0.0]),
+        table_geom_id=model.geom("table").id,
+        workspace_min=ws_lo,
+        workspace_max=ws_hi,
+        bin_min=bin_lo,
+        bin_max=bin_hi,
+        bin_geom_ids=bin_ids,
+        robot_prefix=robot.prefix,
+        arm_joints=panda.arm_joint_names,
+        arm_actuators=panda.arm_actuator_names,
+        finger_joints=panda.finger_joint_names,
+        gripper_actuator=panda.gripper_actuator_name,
+        tcp_site=model.site(panda.tcp_site_id).name,
+        hand_body=model.body(panda.hand_body_id).name,
+    )
