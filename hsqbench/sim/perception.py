@@ -11,8 +11,9 @@ One observation (:meth:`Perception.observe`):
 3. **Back-project** the valid pixels with the intrinsics ``K`` and move them into the world with
    the *believed* camera pose (the true pose composed with the calibration error, if any);
    see :mod:`hsqbench.sim.camera` for the conventions.
-4. **Crop** each camera's points to the workspace box (grown by ``workspace_margin_m`` in x and
-   y, up to its top plus the margin) and remove the table: every point at most
+   Only each camera's region of interest (the image rectangle of the crop box) is processed.
+4. **Crop** each camera's points to the workspace box (grown by ``workspace_margin_m`` on every
+   side but the bottom) and remove the table: every point at most
    ``table_margin_m`` above the support plane goes. With ``refit_table`` the plane is first
    re-fitted to that camera's own points near the nominal table (least squares, trimmed): a
    calibration error of 0.4 deg moves the table by several millimetres at 1 m, more than the
@@ -27,6 +28,15 @@ removes pixels showing robot geoms (simulator ground truth, so off by default).
 All randomness comes from the generators passed in: the calibration errors from the one given to
 :class:`Perception` (drawn even when the model is off, so the noise stream does not depend on
 it), the depth noise from the one given to :meth:`Perception.observe`.
+
+Use (one :class:`Perception` per compiled scene; renderers are reused across observations)::
+
+    rng = np.random.default_rng(trial_seed)
+    with Perception.from_scene(model, info, rng=rng) as perception:
+        cloud = perception.observe(data, rng)   # the arm at home, data forward-consistent
+    context = PlanningContext(support_plane=tuple(cloud.support_plane),
+                              camera_positions=cloud.camera_positions,
+                              workspace_bounds=(cloud.workspace_min, cloud.workspace_max))
 """
 
 from __future__ import annotations
@@ -42,6 +52,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.config import load_config
+from hsqbench.planner.api import validate_plane
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.sim.camera import (
     backproject,
@@ -212,17 +223,6 @@ class PerceivedCloud:
 # ---- cropping ----------------------------------------------------------------------------------
 
 
-def validate_support_plane(plane: ArrayLike) -> Array:
-    """A (4,) plane with a unit normal; raises on a wrong shape, NaN or a zero normal."""
-    p = np.asarray(plane, dtype=np.float64).reshape(-1)
-    if p.shape != (4,) or not np.all(np.isfinite(p)):
-        raise ValueError(f"support plane must be 4 finite numbers (a, b, c, d), got {plane!r}")
-    norm = np.linalg.norm(p[:3])
-    if norm < 1e-9:
-        raise ValueError(f"support plane {plane!r} has a zero normal")
-    return p / norm
-
-
 def fit_plane(points: Array, up: Array) -> Array:
     """Least-squares plane (4,) through (N, 3) points (smallest-variance direction of their
     covariance), normal oriented along ``up``."""
@@ -326,7 +326,7 @@ class Perception:
         self.model = model
         if not cameras:
             raise ValueError("Perception needs at least one depth camera")
-        self.support_plane = validate_support_plane(support_plane)
+        self.support_plane = validate_plane(support_plane)
         self.workspace_min = np.asarray(workspace_min, dtype=np.float64).reshape(3)
         self.workspace_max = np.asarray(workspace_max, dtype=np.float64).reshape(3)
         if not np.all(self.workspace_min < self.workspace_max):
