@@ -142,6 +142,11 @@ def load_perception_config(path: str | Path | None = "perception") -> Perception
 class CameraView:
     """One camera's part of an observation.
 
+    For Rerun: log ``Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3])`` of
+    ``T_world_camera`` on the camera entity and ``Pinhole`` with ``camera_xyz=RDF`` (the optical
+    frame) and ``K`` with ``cx + 0.5, cy + 0.5`` (Rerun puts integer coordinates at pixel
+    corners), then ``DepthImage(depth_m, meter=1.0)``.
+
     Attributes:
         name: MuJoCo camera name.
         K: (3, 3) intrinsics, pixel centres at integer coordinates (see :mod:`hsqbench.sim.camera`).
