@@ -142,3 +142,27 @@ def test_report_command(run_dir: Path, capsys) -> None:
     assert "tables.md" in capsys.readouterr().out
     assert main(["report", str(run_dir / "nope")]) == 2
     assert "not a folder" in capsys.readouterr().err
+
+
+class _EarlyStop(FakeBackend):
+    """Ends every packed round after its first attempt, breaking the paper's stop rule."""
+
+    def run_packed(self, objects, seed, planner):
+        result = super().run_packed(objects, seed, planner)
+        result.attempts = result.attempts[:1]
+        result.objects_cleared = result.objects_cleared[:1] if result.attempts[0].success else []
+        return result
+
+
+def test_report_flags_rounds_that_break_the_stop_rule(tmp_path: Path) -> None:
+    config = ExperimentConfig(
+        planners=("hsq",),
+        isolated=IsolatedConfig(enabled=False),
+        packed=PackedConfig(objects=("mug", "bowl", "pear"), rounds=3, objects_per_round=3),
+    )
+    run_benchmark(config, tmp_path / "early", backend=_EarlyStop(), progress=False)
+    write_report(tmp_path / "early")
+    assert "check the trial runner's stop rule" in (tmp_path / "early" / "tables.md").read_text()
+    run_benchmark(config, tmp_path / "fine", backend=FakeBackend(), progress=False)
+    write_report(tmp_path / "fine")
+    assert "stop rule" not in (tmp_path / "fine" / "tables.md").read_text()

@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     config = load_experiment_config(args.config)
     run_dir = _run_dir(args.run, args.config)
     executor = make_executor(args.executor, args.jobs)
+    print(f"run folder: {run_dir}", file=sys.stderr)
     try:
         summary = run_benchmark(
             config,

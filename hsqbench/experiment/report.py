@@ -110,6 +110,12 @@ def load_run(run_dir: str | Path) -> RunData:
     hashes = set(attempts["config_hash"]) if len(attempts) else set()
     if len(hashes) > 1:
         notes.append(f"rows carry {len(hashes)} config hashes {sorted(hashes)}: results mixed")
+    broken = _stop_rule_violations(attempts, rounds)
+    if broken:
+        notes.append(
+            f"{broken} packed round(s) ended with objects left and without two consecutive "
+            "failures: check the trial runner's stop rule"
+        )
     confidence = float(config.get("confidence", 0.95))
     backend = meta.get("backend", {}).get("backend")
     if backend == "sim":
@@ -119,6 +125,21 @@ def load_run(run_dir: str | Path) -> RunData:
     else:
         measured = f"measured, {backend} backend (this run)"
     return RunData(attempts, rounds, meta, planners, objects, confidence, notes, measured)
+
+
+def _stop_rule_violations(attempts: pd.DataFrame, rounds: pd.DataFrame) -> int:
+    """Rounds that stopped early: objects left, yet the last two attempts were not failures."""
+    count = 0
+    ok_rounds = rounds[rounds["status"] == STATUS_OK]
+    packed = attempts[(attempts["experiment"] == "packed") & (attempts["status"] == STATUS_OK)]
+    by_key = {k: g.sort_values("attempt_index") for k, g in packed.groupby("trial_key")}
+    for _, r in ok_rounds.iterrows():
+        if r["n_cleared"] >= r["n_objects"]:
+            continue
+        tail = by_key.get(r["trial_key"])
+        if tail is None or len(tail) < 2 or tail["success"].iloc[-2:].sum() > 0:
+            count += 1
+    return count
 
 
 def _ok(df: pd.DataFrame, experiment: str, planner: str | None = None) -> pd.DataFrame:

@@ -208,7 +208,7 @@ def run_benchmark(
             bar.set_postfix(tally.postfix())
         status = "failed"
         try:
-            for trial_run in executor.run(backend, pending):
+            for trial_run in executor.run(backend, pending) if pending else ():
                 rows = store.append(trial_run, chash, version)
                 summary.ran += 1
                 summary.errors += not trial_run.ok
