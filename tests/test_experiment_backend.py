@@ -1,0 +1,78 @@
+"""The default backend calls the trial runner's contract; a missing runner is said plainly."""
+
+from __future__ import annotations
+
+import sys
+import types
+from dataclasses import dataclass
+
+import pytest
+
+from hsqbench.experiment.backend import SimBackend, TrialRunnerUnavailable, execute_trial
+from hsqbench.experiment.seeds import TrialSpec
+from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
+
+
+@dataclass(frozen=True)
+class _TrialConfig:
+    settle_s: float = 0.5
+
+
+def _trial_module(calls: list) -> types.ModuleType:
+    mod = types.ModuleType("hsqbench.sim.trial")
+    mod.TrialConfig = _TrialConfig
+
+    def run_isolated_trial(obj, seed, planner, config):
+        calls.append(("isolated", obj, seed, planner, config))
+        return TrialResult(obj, seed, planner, [Attempt(Outcome.SUCCESS, target=obj)])
+
+    def run_packed_round(objects, seed, planner, config):
+        calls.append(("packed", tuple(objects), seed, planner, config))
+        return RoundResult(objects, seed, planner, [Attempt(Outcome.DROPPED)] * 2, [])
+
+    mod.run_isolated_trial = run_isolated_trial
+    mod.run_packed_round = run_packed_round
+    return mod
+
+
+def test_sim_backend_passes_the_loaded_trial_config(tmp_path, monkeypatch) -> None:
+    calls: list = []
+    monkeypatch.setitem(sys.modules, "hsqbench.sim.trial", _trial_module(calls))
+    path = tmp_path / "trial.yaml"
+    path.write_text("settle_s: 0.25\n")
+    backend = SimBackend(str(path))
+    backend.check(("hsq",))
+    assert backend.fingerprint()["trial_config"] == {"settle_s": 0.25}
+    run = execute_trial(backend, TrialSpec("isolated", "hsq", 0, 0, ("mug",), 7))
+    assert run.ok and run.result.success
+    run = execute_trial(backend, TrialSpec("packed", "hsq", 0, 0, ("mug", "bowl"), 8))
+    assert run.ok and run.result.clearance_rate == 0.0
+    assert calls == [
+        ("isolated", "mug", 7, "hsq", _TrialConfig(0.25)),
+        ("packed", ("mug", "bowl"), 8, "hsq", _TrialConfig(0.25)),
+    ]
+    with pytest.raises(ValueError, match="unknown planner"):
+        backend.check(("hsq", "no-such-planner"))
+
+
+def test_sim_backend_pickles_without_its_cache(tmp_path, monkeypatch) -> None:
+    import pickle
+
+    monkeypatch.setitem(sys.modules, "hsqbench.sim.trial", _trial_module([]))
+    path = tmp_path / "trial.yaml"
+    path.write_text("settle_s: 0.25\n")
+    backend = SimBackend(str(path))
+    backend.check(("hsq",))
+    clone = pickle.loads(pickle.dumps(backend))
+    assert clone.trial_config == str(path) and clone._config is None
+
+
+def test_missing_or_incomplete_trial_runner(monkeypatch) -> None:
+    monkeypatch.setitem(sys.modules, "hsqbench.sim.trial", None)
+    with pytest.raises(TrialRunnerUnavailable, match="not available"):
+        SimBackend().check(("hsq",))
+    half = types.ModuleType("hsqbench.sim.trial")
+    half.TrialConfig = _TrialConfig
+    monkeypatch.setitem(sys.modules, "hsqbench.sim.trial", half)
+    with pytest.raises(TrialRunnerUnavailable, match="run_isolated_trial"):
+        SimBackend().check(("hsq",))
