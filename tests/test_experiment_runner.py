@@ -210,3 +210,25 @@ def test_benchmark_command_argument_errors(tmp_path, capsys) -> None:
     assert "--resume" in capsys.readouterr().err
     assert main(["benchmark", "--config", "nope", "--run", str(tmp_path / "x")]) == 2
     assert "nope" in capsys.readouterr().err
+
+
+def test_benchmark_command_end_to_end_with_a_stand_in_backend(tmp_path, monkeypatch, capsys):
+    """The command's own flow (run, report, exit codes); the trial runner is replaced."""
+    import warnings
+
+    import hsqbench.experiment.runner as runner_module
+    from hsqbench.cli import main
+
+    backends = iter([FakeBackend(interrupt_after=1), FakeBackend(raise_on=("foam_brick",))])
+    monkeypatch.setattr(runner_module, "SimBackend", lambda name: next(backends))
+    run_dir = tmp_path / "quick"
+    args = ["benchmark", "--config", "quick", "--run", str(run_dir), "--jobs", "1"]
+    assert main(args) == 130
+    assert "--resume" in capsys.readouterr().err
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        code = main([*args, "--resume"])
+    out, err = capsys.readouterr()
+    assert code == 1  # the foam_brick trials failed with an error: a failing exit, said why
+    assert "1 already done" in out and "tables.md" in out and "retry-errors" in err
+    assert (run_dir / "tables.md").exists()
