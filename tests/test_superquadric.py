@@ -4,13 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from hsqbench.superquadric import (
+    CURVATURE_AXIS_OFFSET,
+    EPS_MAX,
+    EPS_MIN,
     Superquadric,
     alpha_beta,
     coverage_beta,
+    gaussian_curvature_local,
     point_to_surface_alpha,
 )
 
@@ -133,8 +139,8 @@ def test_normals_unit_outward_and_match_finite_differences(name: str) -> None:
     step = 1e-6
     assert np.all(sq.inside_outside_pow(points + step * normals) > 1.0)
     assert np.all(sq.inside_outside_pow(points - step * normals) < 1.0)
-    if SHAPES[name][0] <= 1.0 and SHAPES[name][1] <= 1.0:
-        assert np.all(np.einsum("ij,ij->i", normals, points - sq.translation) > 0.0)
+    # every superquadric with eps <= 2 is convex and contains its centre
+    assert np.all(np.einsum("ij,ij->i", normals, points - sq.translation) > 0.0)
     # central differences of G; keep away from the axis planes where eps > 1 makes G non-smooth
     local = sq.to_local(points)
     smooth = np.all(np.abs(local) > 1e-3, axis=1)
@@ -150,6 +156,9 @@ def test_normals_unit_outward_and_match_finite_differences(name: str) -> None:
     fd /= np.linalg.norm(fd, axis=1, keepdims=True)
     assert smooth.sum() > 50
     np.testing.assert_allclose(np.einsum("ij,ij->i", fd, normals[smooth]), 1.0, atol=1e-5)
+    # on an axis plane the normal of a shape with eps > 1 turns like |x|^(2/eps - 1), so rounding
+    # off the plane moves it; elsewhere normals() agrees with the sampler to rounding
+    np.testing.assert_allclose(sq.normals(points[smooth]), normals[smooth], atol=1e-9)
 
 
 # ------------------------------------------------------------------------------------ alpha / beta
@@ -212,3 +221,284 @@ def test_fit_measures_reject_bad_inputs() -> None:
         coverage_beta(np.zeros((3, 3)), sq, 0.003, 0.0)
     with pytest.raises(ValueError, match="shape"):
         point_to_surface_alpha(np.zeros((3, 2)), sq, 0.003)
+
+
+# ------------------------------------------------------------------------------------ implicit function
+SPECIAL_POINTS = np.array(
+    [
+        [0.0, 0.0, 0.0],
+        [1e6, 0.0, 0.0],
+        [0.0, -1e6, 1e6],
+        [0.0, 0.0, 0.05],
+        [0.0, 0.03, 0.0],
+        [1e-300, 0.0, 0.0],
+        [0.0, 0.0, -1e-12],
+        [0.02, 0.02, 0.02],
+    ]
+)
+
+
+@pytest.mark.parametrize("eps1", [EPS_MIN, 0.3, 1.0, 1.7, EPS_MAX])
+@pytest.mark.parametrize("eps2", [EPS_MIN, 0.6, 1.0, EPS_MAX])
+def test_implicit_function_and_radial_distance_finite_everywhere(eps1: float, eps2: float) -> None:
+    sq = Superquadric(eps1, eps2, (0.03, 0.04, 0.05))
+    points = np.vstack([SPECIAL_POINTS, sq.sample_surface(0.005)[0]])
+    for values in (
+        sq.inside_outside(points),
+        sq.inside_outside_pow(points),
+        sq.radial_distance(points),
+        sq.gaussian_curvature(points),
+        sq.normals(points),
+    ):
+        assert np.all(np.isfinite(values))
+    surface = points[len(SPECIAL_POINTS) :]
+    np.testing.assert_allclose(sq.radial_distance(surface), 0.0, atol=1e-12)
+    # along the axes the surface is at the semi-axis
+    axes = np.vstack([np.diag(sq.scale) * 3.0, -np.diag(sq.scale) * 0.5])
+    np.testing.assert_allclose(
+        sq.radial_distance(axes), np.concatenate([2 * sq.scale, 0.5 * sq.scale])
+    )
+
+
+def test_radial_distance_of_sphere_is_distance_to_sphere() -> None:
+    rng = np.random.default_rng(8)
+    rotation, translation = random_pose(rng)
+    sq = Superquadric(1.0, 1.0, (0.04, 0.04, 0.04), rotation, translation)
+    points = translation + rng.normal(size=(500, 3)) * rng.uniform(0.0, 0.2, (500, 1))
+    expected = np.abs(np.linalg.norm(points - translation, axis=1) - 0.04)
+    np.testing.assert_allclose(sq.radial_distance(points), expected, atol=1e-12)
+
+
+# ------------------------------------------------------------------------------------ curvature
+def test_curvature_of_sphere() -> None:
+    radius = 0.035
+    sq = Superquadric(1.0, 1.0, (radius,) * 3, *random_pose(np.random.default_rng(9)))
+    points, _ = sq.sample_surface(0.003)
+    # axis endpoints are included: the offset from the axis planes does not bias a smooth surface
+    points = np.vstack([points, sq.to_world(np.diag(sq.scale)), sq.to_world(-np.diag(sq.scale))])
+    np.testing.assert_allclose(sq.gaussian_curvature(points), 1.0 / radius**2, rtol=1e-9)
+    # points off the surface are projected radially first
+    off = sq.translation + 2.0 * (points - sq.translation)
+    np.testing.assert_allclose(sq.gaussian_curvature(off), 1.0 / radius**2, rtol=1e-9)
+
+
+def test_curvature_of_ellipsoid_matches_closed_form() -> None:
+    a, b, c = 0.015, 0.05, 0.03
+    sq = Superquadric(1.0, 1.0, (a, b, c), *random_pose(np.random.default_rng(10)))
+    points, _ = sq.sample_surface(0.003)
+    local = sq.to_local(points)
+    expected = 1.0 / ((a * b * c) ** 2 * np.sum(local**2 / np.array([a, b, c]) ** 4, axis=1) ** 2)
+    k = sq.gaussian_curvature(points)
+    assert np.all(k > 0.0)
+    np.testing.assert_allclose(k, expected, rtol=1e-6)
+
+
+def _fd_curvature(sq: Superquadric, local: np.ndarray, h: float = 1e-5) -> np.ndarray:
+    """K = g^T adj(H) g / |g|^4 of rho = sqrt(G) by central differences (reference)."""
+
+    def rho(x: np.ndarray) -> np.ndarray:
+        return np.sqrt(sq.inside_outside_pow(x, local=True))
+
+    e = np.eye(3) * h
+    g = np.stack([(rho(local + e[i]) - rho(local - e[i])) / (2 * h) for i in range(3)], axis=1)
+    hess = np.empty((local.shape[0], 3, 3))
+    for i in range(3):
+        for j in range(3):
+            hess[:, i, j] = (
+                rho(local + e[i] + e[j])
+                - rho(local + e[i] - e[j])
+                - rho(local - e[i] + e[j])
+                + rho(local - e[i] - e[j])
+            ) / (4 * h * h)
+    adj = np.stack(
+        [
+            np.cross(hess[:, 1], hess[:, 2]),
+            np.cross(hess[:, 2], hess[:, 0]),
+            np.cross(hess[:, 0], hess[:, 1]),
+        ],
+        axis=2,
+    )
+    return np.einsum("ni,nij,nj->n", g, adj, g) / np.sum(g * g, axis=1) ** 2
+
+
+@pytest.mark.parametrize("eps", [(0.5, 0.7), (1.5, 0.3), (0.3, 1.6), (1.2, 1.8), (0.2, 0.2)])
+def test_curvature_matches_finite_differences(eps: tuple[float, float]) -> None:
+    sq = Superquadric(*eps, (0.03, 0.04, 0.05))
+    local, _ = sq.sample_surface(0.004)
+    local = local[np.all(np.abs(local) > 0.003, axis=1)]  # away from the non-smooth axis planes
+    local = local[np.random.default_rng(11).choice(local.shape[0], 40, replace=False)]
+    k = sq.gaussian_curvature(local)
+    np.testing.assert_allclose(k, _fd_curvature(sq, local), rtol=1e-4, atol=1e-2)
+
+
+def test_curvature_zero_on_cube_faces_and_cylinder_side() -> None:
+    cube = Superquadric(0.1, 0.1, (0.03, 0.04, 0.05))
+    face = np.array(
+        [[0.0, 0.0, 0.05], [0.01, -0.02, 0.05], [0.03, 0.01, -0.02], [-0.015, 0.04, 0.03]]
+    )
+    face /= np.sqrt(cube.inside_outside_pow(face))[:, None]
+    # zero up to (fraction of the face)^(2/eps - 2): at least 1e6 below a 3 cm sphere's 1/R^2
+    assert np.all(cube.gaussian_curvature(face) * 0.03**2 < 1e-6)
+    # near the rounded edges it is large
+    assert cube.gaussian_curvature([[0.03, 0.04, 0.05]])[0] > 1e4
+    cylinder = Superquadric(0.1, 1.0, (0.03, 0.03, 0.05))
+    angles = np.linspace(0.0, 2.0 * np.pi, 13)
+    side = np.column_stack(
+        [0.03 * np.cos(angles), 0.03 * np.sin(angles), np.linspace(-0.03, 0.03, 13)]
+    )
+    # eps1 = 0.1 is not exactly straight: up to 60 % of the height K is 1e3 times below 1/R^2
+    assert np.all(cylinder.gaussian_curvature(side) * 0.03**2 < 1e-3)
+    # the flat caps too; the rim is curved
+    caps = cylinder.gaussian_curvature([[0.01, 0.0, 0.05], [0.0, -0.02, -0.05]])
+    assert np.all(caps * 0.03**2 < 1e-3)
+    assert cylinder.gaussian_curvature([[0.0, 0.03, 0.05]])[0] * 0.03**2 > 1.0
+
+
+@pytest.mark.parametrize("eps1", [EPS_MIN, 0.5, 1.0, 1.5, 1.9, EPS_MAX])
+@pytest.mark.parametrize("eps2", [EPS_MIN, 0.5, 1.0, 1.5, 1.9, EPS_MAX])
+def test_curvature_finite_and_non_negative_on_sampled_surfaces(eps1: float, eps2: float) -> None:
+    sq = Superquadric(eps1, eps2, (0.02, 0.03, 0.05), *random_pose(np.random.default_rng(12)))
+    points, _ = sq.sample_surface(0.004)
+    tips = sq.to_world(np.vstack([np.diag(sq.scale), -np.diag(sq.scale)]))
+    k = sq.gaussian_curvature(np.vstack([points, tips]))
+    assert np.all(np.isfinite(k))
+    assert np.all(k >= 0.0)
+
+
+def test_curvature_at_pinched_tip_is_large_but_finite() -> None:
+    """eps > 1: unbounded at the axis endpoint, so the tip is evaluated at the documented offset."""
+    sq = Superquadric(1.5, 1.5, (0.03, 0.03, 0.03))
+    tip = sq.gaussian_curvature([[0.0, 0.0, 0.03]])[0]
+    near = sq.gaussian_curvature([[0.003, 0.003, 0.03]])[0]
+    offset = np.full(3, CURVATURE_AXIS_OFFSET * 0.03)
+    offset[2] = 0.03
+    assert np.isfinite(tip) and tip > 100 * near > 0
+    assert tip == pytest.approx(sq.gaussian_curvature(offset[None])[0], rel=1e-3)
+
+
+def test_curvature_rows_with_own_parameters() -> None:
+    shapes = [
+        Superquadric(0.3, 1.2, (0.02, 0.03, 0.04)),
+        Superquadric(1.0, 1.0, (0.05, 0.05, 0.05)),
+    ]
+    local = np.array([[0.01, 0.01, 0.03], [0.0, 0.03, 0.04]])
+    rows = gaussian_curvature_local(
+        local,
+        [s.eps1 for s in shapes],
+        [s.eps2 for s in shapes],
+        np.array([s.scale for s in shapes]),
+    )
+    single = [s.gaussian_curvature(p[None])[0] for s, p in zip(shapes, local, strict=True)]
+    np.testing.assert_allclose(rows, single, rtol=1e-12)
+    assert rows[1] == pytest.approx(1.0 / 0.05**2)
+
+
+# ------------------------------------------------------------------------------------ mesh, volume
+@pytest.mark.parametrize("name", sorted(SHAPES))
+def test_mesh_is_watertight_on_surface_with_right_volume(name: str) -> None:
+    sq = make(name, np.random.default_rng(13))
+    mesh = sq.to_trimesh()
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    np.testing.assert_allclose(sq.inside_outside(mesh.vertices), 1.0, rtol=1e-9)
+    assert mesh.volume == pytest.approx(sq.volume, rel=0.005)  # positive: faces point outward
+    vertices, faces = sq.to_mesh(8)
+    assert faces.dtype.kind == "i" and faces.max() == vertices.shape[0] - 1
+
+
+def test_closed_form_volumes() -> None:
+    assert Superquadric(1.0, 1.0, (0.01, 0.02, 0.03)).volume == pytest.approx(4 / 3 * np.pi * 6e-6)
+    assert Superquadric(2.0, 2.0, (0.01, 0.02, 0.03)).volume == pytest.approx(8 / 6 * 6e-6)
+    # a cylinder with eps1 -> 0: pi r^2 h
+    assert Superquadric(EPS_MIN, 1.0, (0.01, 0.01, 0.03)).volume == pytest.approx(
+        np.pi * 1e-4 * 0.06, rel=0.05
+    )
+
+
+def test_principal_axes_and_repr() -> None:
+    sq = make("cube", np.random.default_rng(14))
+    np.testing.assert_allclose(
+        sq.principal_axes[:, 2], sq.to_world([[0, 0, 1]])[0] - sq.translation
+    )
+    text = repr(sq)
+    assert text.startswith("Superquadric(eps=(0.1, 0.1), scale_mm=[30.0, 40.0, 50.0]")
+    assert "\n" not in text
+
+
+def test_mesh_rejects_coarse_resolution() -> None:
+    with pytest.raises(ValueError, match="n_quarter"):
+        make("sphere").to_mesh(1)
+
+
+# ------------------------------------------------------------------------------------ properties
+eps_st = st.floats(EPS_MIN, EPS_MAX)
+scale_st = st.tuples(*[st.floats(0.002, 0.2)] * 3)
+quat_st = st.tuples(*[st.floats(-1.0, 1.0)] * 4).filter(lambda q: np.linalg.norm(q) > 0.1)
+trans_st = st.tuples(*[st.floats(-1.0, 1.0)] * 3)
+points_st = st.lists(st.tuples(*[st.floats(-2.0, 2.0)] * 3), min_size=1, max_size=20)
+
+
+def _sq(e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple) -> Superquadric:
+    return Superquadric(e1, e2, scale, Rotation.from_quat(quat).as_matrix(), trans)
+
+
+@settings(max_examples=60, deadline=None)
+@given(eps_st, eps_st, scale_st, quat_st, trans_st)
+def test_vector_round_trip(e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple) -> None:
+    sq = _sq(e1, e2, scale, quat, trans)
+    vector = sq.to_vector()
+    back = Superquadric.from_vector(vector)
+    np.testing.assert_allclose(back.rotation, sq.rotation, atol=1e-9)
+    if np.linalg.norm(vector[5:8]) < np.pi - 1e-6:  # at pi, +/- rotvec are the same rotation
+        np.testing.assert_allclose(back.to_vector(), vector, atol=1e-9)
+    assert (back.eps1, back.eps2) == (sq.eps1, sq.eps2)
+    np.testing.assert_array_equal(back.scale, sq.scale)
+    np.testing.assert_array_equal(back.translation, sq.translation)
+
+
+@settings(max_examples=60, deadline=None)
+@given(eps_st, eps_st, scale_st, quat_st, trans_st, points_st)
+def test_frame_round_trip(
+    e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple, points: list
+) -> None:
+    sq = _sq(e1, e2, scale, quat, trans)
+    p = np.array(points)
+    np.testing.assert_allclose(sq.to_world(sq.to_local(p)), p, atol=1e-12)
+    np.testing.assert_allclose(sq.to_local(sq.to_world(p)), p, atol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(eps_st, eps_st, scale_st, quat_st, trans_st, quat_st, trans_st, points_st)
+def test_inside_outside_invariant_under_pose_change(
+    e1: float,
+    e2: float,
+    scale: tuple,
+    quat: tuple,
+    trans: tuple,
+    move_quat: tuple,
+    move_trans: tuple,
+    points: list,
+) -> None:
+    sq = _sq(e1, e2, scale, quat, trans)
+    move = Rotation.from_quat(move_quat).as_matrix()
+    shift = np.array(move_trans)
+    moved = Superquadric(e1, e2, scale, move @ sq.rotation, move @ sq.translation + shift)
+    p = np.array(points)
+    q = p @ move.T + shift
+    np.testing.assert_allclose(moved.inside_outside_pow(q), sq.inside_outside_pow(p), rtol=1e-9)
+    np.testing.assert_allclose(
+        moved.radial_distance(q), sq.radial_distance(p), rtol=1e-7, atol=1e-12
+    )
+
+
+@settings(max_examples=60, deadline=None)
+@given(eps_st, eps_st, scale_st, quat_st, trans_st, points_st)
+def test_radial_distance_non_negative_and_finite(
+    e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple, points: list
+) -> None:
+    sq = _sq(e1, e2, scale, quat, trans)
+    p = np.vstack([np.array(points), sq.translation])
+    d = sq.radial_distance(p)
+    assert np.all(np.isfinite(d)) and np.all(d >= 0.0)
+    # the surface lies within sqrt(3) max semi-axis of the centre (box corners)
+    assert np.all(d <= np.linalg.norm(p - sq.translation, axis=1) + np.sqrt(3) * sq.scale.max())
+    assert np.all(np.isfinite(sq.inside_outside(p)))
