@@ -79,8 +79,8 @@ class DepthCameraConfig:
 @dataclass(frozen=True)
 class ViewerCameraConfig:
     name: str = "viewer"
-    pos_m: tuple[float, float, float] = (1.45, 0.75, 0.85)
-    target_m: tuple[float, float, float] = (0.35, -0.05, 0.05)
+    pos_m: tuple[float, float, float] = (1.75, 1.0, 1.2)
+    target_m: tuple[float, float, float] = (0.3, -0.1, 0.2)
     fovy_deg: float = 45.0
     width_px: int = 1280
     height_px: int = 960
@@ -298,6 +298,15 @@ def _add_static(spec: mujoco.MjSpec, cfg: SceneConfig, physics: PhysicsConfig) -
     world = spec.worldbody
     t = cfg.table
     spec.add_texture(
+        name="sky",
+        type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+        rgb1=[0.75, 0.8, 0.85],
+        rgb2=[0.2, 0.22, 0.25],
+        width=512,
+        height=3072,
+    )
+    spec.add_texture(
         name="floor",
         type=mujoco.mjtTexture.mjTEXTURE_2D,
         builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
@@ -403,19 +412,31 @@ def _add_static(spec: mujoco.MjSpec, cfg: SceneConfig, physics: PhysicsConfig) -
     spec.visual.map.zfar = 5.0
 
 
-def _draw_objects(
-    kind: str, objects: Sequence[str | ObjectLike] | str | ObjectLike | None, n_packed: int, rng
-) -> list[ObjectLike]:
+def draw_object_names(kind: str, n_packed: int, rng: np.random.Generator) -> list[str]:
+    """Names drawn from the 15 YCB objects: one for ``isolated``, ``n_packed`` different ones
+    for ``packed``."""
     from hsqbench.assets.library import ycb_names
 
     if kind not in KINDS:
         raise ValueError(f"unknown scene kind {kind!r}; known: {list(KINDS)}")
+    pool = ycb_names()
+    count = 1 if kind == "isolated" else n_packed
+    if count > len(pool):
+        raise ValueError(f"cannot draw {count} different objects from {len(pool)}: {pool}")
+    return [pool[i] for i in rng.choice(len(pool), count, replace=False)]
+
+
+def _resolve_objects(
+    kind: str,
+    objects: Sequence[str | ObjectLike] | str | ObjectLike | None,
+    n_packed: int,
+    rng: np.random.Generator,
+) -> list[ObjectLike]:
+    if kind not in KINDS:
+        raise ValueError(f"unknown scene kind {kind!r}; known: {list(KINDS)}")
+    chosen: list[str | ObjectLike]
     if objects is None:
-        pool = ycb_names()
-        count = 1 if kind == "isolated" else n_packed
-        if count > len(pool):
-            raise ValueError(f"cannot draw {count} different objects from {len(pool)}: {pool}")
-        chosen: list[str | ObjectLike] = [pool[i] for i in rng.choice(len(pool), count, False)]
+        chosen = list(draw_object_names(kind, n_packed, rng))
     elif isinstance(objects, str) or not isinstance(objects, Sequence):
         chosen = [objects]
     else:
@@ -424,11 +445,10 @@ def _draw_objects(
         raise ValueError(f"an isolated scene has one object, got {len(chosen)}")
     if not chosen:
         raise ValueError("a packed scene needs at least one object")
-    assets = [resolve_object(o) for o in chosen]
-    names = [a.name for a in assets]
+    names = [o if isinstance(o, str) else o.name for o in chosen]
     if len(set(names)) != len(names):
         raise ValueError(f"objects must be different, got {names}")
-    return assets
+    return [resolve_object(o) for o in chosen]
 
 
 def compose_scene(
@@ -510,7 +530,7 @@ def build_scene(
     robot = robot_config or load_robot_config()
     physics = physics_config or load_physics_config()
     rng = np.random.default_rng(seed)
-    assets = _draw_objects(kind, objects, cfg.placement.n_packed, rng)
+    assets = _resolve_objects(kind, objects, cfg.placement.n_packed, rng)
     ws = cfg.workspace
     lo = np.asarray(ws.centre_xy_m) - np.asarray(ws.size_m) / 2
     hi = np.asarray(ws.centre_xy_m) + np.asarray(ws.size_m) / 2
