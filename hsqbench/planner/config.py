@@ -14,7 +14,40 @@ from hsqbench.config import load_config
 
 @dataclass(frozen=True)
 class RecoveryConfig:
-    """Stage one: hidden superquadric recovery (owned by ``hsqbench.planner.recovery``)."""
+    """Stage one: hidden superquadric recovery (owned by ``hsqbench.planner.recovery``).
+
+    Lengths in metres; weights and probabilities dimensionless. Reasons for each default are in
+    the ``recovery:`` section of ``configs/planner.yaml``.
+    """
+
+    # Downsampling.
+    voxel_size_m: float = 0.004
+    max_fit_points: int = 1500
+    # Seeds: the paper's K rule, counted on a cloud of the paper's sensor density.
+    k_count_voxel_m: float = 0.002
+    max_parts: int = 16
+    kmeans_n_init: int = 1
+    # Probabilistic model.
+    outlier_weight: float = 0.2
+    hidden_outlier_weight: float = 0.9
+    workspace_margin_m: float = 0.005
+    # EMS inference.
+    em_max_iterations: int = 30
+    lm_steps: int = 2
+    em_tolerance: float = 1e-3
+    max_switches: int = 2
+    hidden_max_switches: int = 1
+    switch_iterations: int = 3
+    dual_scale_ratio: float = 0.7
+    eps_min: float = 0.1
+    eps_max: float = 2.0
+    scale_min_m: float = 0.002
+    sigma_min_m: float = 0.0005
+    active_weight: float = 1e-4
+    # Outputs.
+    inlier_threshold: float = 0.5
+    surface_spacing_m: float = 0.002
+    coverage_distance_m: float = 0.004
 
 
 @dataclass(frozen=True)
