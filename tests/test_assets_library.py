@@ -28,6 +28,9 @@ YCB = os.environ.get("HSQ_YCB_DIR")
 needs_ycb = pytest.mark.skipif(not YCB or not Path(YCB).is_dir(), reason="HSQ_YCB_DIR is not set")
 
 
+USER_CACHE = os.environ.get("HSQ_CACHE_DIR")
+
+
 @pytest.fixture(autouse=True)
 def cache(tmp_path, monkeypatch) -> Path:
     monkeypatch.setenv("HSQ_CACHE_DIR", str(tmp_path / "cache"))
@@ -126,8 +129,13 @@ def test_cracker_box_builds_textured_in_its_object_frame(fast_config):
 
 @pytest.mark.slow
 @needs_ycb
-def test_every_ycb_object_builds_and_compiles():
-    """The full library with the project parameters (minutes; cached under HSQ_CACHE_DIR)."""
+def test_every_ycb_object_builds_and_compiles(monkeypatch):
+    """The full library with the project parameters: minutes of CoACD, so it uses the real,
+    content-addressed cache (as `make assets` does) and is quick once the library is built."""
+    if USER_CACHE:
+        monkeypatch.setenv("HSQ_CACHE_DIR", USER_CACHE)
+    else:
+        monkeypatch.delenv("HSQ_CACHE_DIR")
     assets = build_objects(ycb_names(), progress=False)
     for asset in assets:
         assert 1 <= len(asset.collision_meshes) <= load_assets_config().coacd.max_convex_hull
