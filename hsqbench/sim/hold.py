@@ -303,6 +303,7 @@ def run_hold_test(
     mujoco.mj_resetData(model, data)
     data.qpos[panda.finger_qpos_adr] = panda.max_width() / 2.0
     panda.open_gripper(data)
+    panda.sync_gripper_target(data)
     mujoco.mj_forward(model, data)
 
     dt = model.opt.timestep

@@ -8,12 +8,16 @@ it; the values live in ``configs/robot.yaml``. The changes, each with its reason
    stiffness of 100 N/m per metre of finger travel: closed on a 6 cm object it squeezes with
    about 1.5 N per finger, so a 1 kg bottle slides out. The real Franka Hand grasps with 70 N
    continuous (140 N peak). It is replaced by ``gripper``, a force-limited position servo on the
-   same tendon. Per finger: ``f = clip(k (w_cmd / 2 - q) - c dq/dt, -f_max, f_max)``, where
-   ``q`` is the finger's travel from the centre and ``w_cmd`` the commanded opening width. The
-   command to close is a width below zero, so the force limit, not the stiffness, sets the
-   squeeze on anything wider than ``2 (f_max / k + close_width)``: the hand behaves like the
-   real one's ``grasp`` (close at a set speed, then hold a set force). The damping ``c`` bounds
-   the free closing speed at ``f_max / c``. Opening is the same servo with a positive width.
+   same tendon. Per finger: ``f = clip(k (w_t / 2 - q), -f_max, f_max)``, where ``q`` is the
+   finger's travel from the centre and ``w_t`` a width target that follows the commanded width
+   through a first-order filter (time constant ``tau``), so free fingers move at about
+   ``(w_cmd - w) / (2 tau)`` instead of jumping. The command to close is a width below zero, so
+   on anything wider than ``2 f_max / k + close_width`` the force limit, not the stiffness, sets
+   the squeeze: the hand behaves like the real one's ``grasp`` (close at a moderate speed,
+   then hold a set force). Opening is the same servo with a positive width. The finger joints'
+   damping becomes ``c`` (Menagerie: 1 N s/m), about critical for the servo. Limiting the speed
+   with a large damping instead does not work in MuJoCo: damping is integrated implicitly,
+   after the contact solver, and with 1400 N s/m the pads ring on the object by +-35 N.
 2. Finger pads. The five box pads on each fingertip get rubber-like friction, torsional
    friction (``condim`` 4, so a grasped object resists spinning about the closing axis, as it
    does on the real pads' contact patch) and a stiffer contact so 70 N does not sink the pads
@@ -27,7 +31,7 @@ it; the values live in ``configs/robot.yaml``. The changes, each with its reason
    gravity in its torque loop, so its joint servos track without a load-dependent sag. Without
    it, Menagerie's servos sag a few millimetres at the fingertips (see ``configs/robot.yaml``).
 
-Unchanged: geometry, masses, joint limits, armature and damping, the finger equality, and the
+Unchanged: geometry, masses, joint limits, armature, arm joint damping, the finger equality, and the
 arm actuators ``actuator1..7`` (position servos with Menagerie's gains, control and force
 ranges). The arm is commanded by joint targets in radians through those actuators.
 """
@@ -65,19 +69,26 @@ class GripperConfig:
     Attributes:
         max_force_per_finger_n: force limit of each finger, N.
         stiffness_n_per_m: per-finger position gain, N per metre of finger travel.
-        damping_ns_per_m: per-finger velocity damping, N s/m.
+        damping_ns_per_m: viscous damping of each finger joint, N s/m.
+        target_time_constant_s: time constant of the filter from commanded to target width, s.
         close_width_m: width commanded to close (below zero, so the force limit sets the squeeze).
         open_width_m: width commanded to open fully.
     """
 
     max_force_per_finger_n: float = 70.0
     stiffness_n_per_m: float = 10000.0
-    damping_ns_per_m: float = 1400.0
+    damping_ns_per_m: float = 60.0
+    target_time_constant_s: float = 0.5
     close_width_m: float = -0.02
     open_width_m: float = 0.08
 
     def __post_init__(self) -> None:
-        for name in ("max_force_per_finger_n", "stiffness_n_per_m", "damping_ns_per_m"):
+        for name in (
+            "max_force_per_finger_n",
+            "stiffness_n_per_m",
+            "damping_ns_per_m",
+            "target_time_constant_s",
+        ):
             if getattr(self, name) <= 0:
                 raise ValueError(f"gripper.{name} must be positive, got {getattr(self, name)}")
 
@@ -182,9 +193,9 @@ def _replace_gripper_actuator(spec: mujoco.MjSpec, g: GripperConfig) -> None:
     """Modification 1, written on the tendon ``split`` whose length is the mean finger travel.
 
     The tendon's length L equals each finger's travel q (the fingers are coupled), and a tendon
-    force F puts F/2 on each finger. So per-finger (k, c, f_max) become tendon gains
-    (2k, 2c, 2 f_max), and with a control u in width units (L* = u / 2) the servo
-    F = 2k (u/2 - L) - 2c dL/dt is gain k on u and bias (0, -2k, -2c).
+    force F puts F/2 on each finger. So per-finger (k, f_max) become tendon values (2k, 2 f_max),
+    and with a control u in width units (L* = u / 2) the servo F = 2k (u/2 - L) is gain k on u
+    and bias (0, -2k, 0). The damping c goes on the finger joints.
     """
     spec.delete(spec.actuator(MENAGERIE_GRIPPER))
     spec.add_actuator(
@@ -194,10 +205,14 @@ def _replace_gripper_actuator(spec: mujoco.MjSpec, g: GripperConfig) -> None:
         gaintype=mujoco.mjtGain.mjGAIN_FIXED,
         gainprm=[g.stiffness_n_per_m] + [0.0] * 9,
         biastype=mujoco.mjtBias.mjBIAS_AFFINE,
-        biasprm=[0.0, -2.0 * g.stiffness_n_per_m, -2.0 * g.damping_ns_per_m] + [0.0] * 7,
+        biasprm=[0.0, -2.0 * g.stiffness_n_per_m, 0.0] + [0.0] * 7,
+        dyntype=mujoco.mjtDyn.mjDYN_FILTEREXACT,
+        dynprm=[g.target_time_constant_s] + [0.0] * 9,
         ctrlrange=[min(g.close_width_m, 0.0), g.open_width_m],
         forcerange=[-2.0 * g.max_force_per_finger_n, 2.0 * g.max_force_per_finger_n],
     )
+    for name in FINGER_JOINTS:
+        spec.joint(name).damping = [g.damping_ns_per_m, 0.0, 0.0]  # linear term only
 
 
 class Hand:
@@ -223,6 +238,7 @@ class Hand:
         except KeyError:
             self.gripper_actuator_id = model.actuator(p + MENAGERIE_GRIPPER).id
         self.gripper_actuator_name = model.actuator(self.gripper_actuator_id).name
+        self._gripper_act_adr = int(model.actuator_actadr[self.gripper_actuator_id])
         self.hand_body_id = model.body(p + HAND_BODY).id
         self.finger_body_ids = np.array([model.body(p + n).id for n in FINGER_BODIES])
         self.tcp_site_id = model.site(p + TCP_SITE).id
@@ -258,6 +274,12 @@ class Hand:
         if not np.isfinite(width_m):
             raise ValueError(f"gripper width must be finite, got {width_m}")
         data.ctrl[self.gripper_actuator_id] = self._ctrl_for_width(width_m)
+
+    def sync_gripper_target(self, data: mujoco.MjData) -> None:
+        """Make the filtered width target equal the command now (after writing ``qpos`` by hand,
+        so the fingers do not move toward an old target)."""
+        if self._gripper_act_adr >= 0:
+            data.act[self._gripper_act_adr] = data.ctrl[self.gripper_actuator_id]
 
     def open_gripper(self, data: mujoco.MjData) -> None:
         data.ctrl[self.gripper_actuator_id] = self.model.actuator_ctrlrange[
@@ -341,4 +363,8 @@ class Panda(Hand):
         width = self.max_width() if open_gripper else 0.0
         data.qpos[self.finger_qpos_adr] = width / 2.0
         data.qvel[self.finger_dof_adr] = 0.0
-        self.set_gripper(data, width if open_gripper else self._close_command())
+        if open_gripper:
+            self.set_gripper(data, width)
+        else:
+            self.close_gripper(data)
+        self.sync_gripper_target(data)
