@@ -8,7 +8,13 @@ import pytest
 
 from hsqbench.planner.candidates import CandidateSet, ClosingLines, roll_frames
 from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.elimination import body_hits, eliminate, support_kappa
+from hsqbench.planner.elimination import (
+    approach_openings,
+    body_hits,
+    eliminate,
+    line_boxes,
+    support_kappa,
+)
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.synthesis import roll_angles
 
@@ -82,8 +88,8 @@ def test_support_needs_points_at_both_contacts() -> None:
 def test_support_threshold_follows_cloud_density() -> None:
     dense, sparse = support_kappa(0.001, CONFIG), support_kappa(0.006, CONFIG)
     assert dense > sparse >= CONFIG.support_min_points
-    # A quarter of a disc of radius 1 cm at 1 mm spacing: about 0.25 * 314 points.
-    assert dense == pytest.approx(0.25 * np.pi * 100, rel=0.02)
+    # A tenth of a disc of radius 1 cm at 1 mm spacing: about 0.1 * 314 points.
+    assert dense == pytest.approx(0.1 * np.pi * 100, rel=0.02)
 
 
 def test_table_removes_rolls_whose_gripper_enters_the_plane() -> None:
@@ -126,7 +132,7 @@ def test_paper_collision_removes_rolls_whose_palm_meets_the_object() -> None:
 
 def test_sweep_removes_poses_whose_fingers_hit_points_beyond_the_contacts() -> None:
     # A wall 5 cm from P_G along the closing axis, beyond the contact at 2 cm: outside the paper's
-    # end planes, but exactly where the open finger (4 to 6.6 cm) goes.
+    # end planes, but exactly where the open finger (3 to 5.6 cm, opening 2 cm + 2 x 1 cm) goes.
     wall = patch((0.05, 0.0, 0.0), (1, 0, 0), radius=0.02)
     cands = one_line(0.02)
     eliminate(cands, np.concatenate([two_faces(0.02), wall]), GRIPPER, CONFIG)
@@ -151,7 +157,7 @@ def test_sweep_catches_points_behind_the_palm() -> None:
 
 
 def brute_force_hits(points, cands, boxes, radius=None, half_height=None) -> np.ndarray:
-    """Every point in every candidate's grasp frame, tested against every box."""
+    """Every point in every candidate's grasp frame, tested against each line's boxes."""
     L = cands.lines
     frames = roll_frames(L.directions, L.approach0, cands.roll_angles)  # (L, R, 3, 3)
     rel = points[None] - L.centres[:, None]  # (L, M, 3)
@@ -162,7 +168,9 @@ def brute_force_hits(points, cands, boxes, radius=None, half_height=None) -> np.
         r2 = np.einsum("lmk,lmk->lm", rel, rel) - s * s
         obstacle = (np.abs(s) <= half_height[:, None]) & (r2 > radius[:, None] ** 2)
     inside = np.zeros(local.shape[:3], dtype=bool)
-    for lo, hi in boxes:
+    for b in range(boxes.shape[1]):
+        lo = boxes[:, b, 0][:, None, None, :]
+        hi = boxes[:, b, 1][:, None, None, :]
         inside |= np.all((local >= lo) & (local <= hi), axis=-1)
     return np.any(inside & obstacle[:, None, :], axis=2)
 
@@ -187,17 +195,32 @@ def test_arc_collision_test_matches_brute_force(seed: int) -> None:
     cands = CandidateSet(lines, ROLLS)
     points = rng.uniform(-0.2, 0.2, size=(40, 3))
     index = np.arange(n_lines)
-    for boxes in (GRIPPER.boxes(), GRIPPER.boxes(palm_extension_m=0.05)):
+    openings = approach_openings(lines.half_lengths, GRIPPER, CONFIG)
+    assert np.ptp(openings) > 0.01  # the fingers really differ from line to line
+    for extension in (0.0, 0.05):
+        # Each line's boxes built one by one, independently of line_boxes.
+        boxes = np.array([GRIPPER.boxes(opening_m=o, palm_extension_m=extension) for o in openings])
+        np.testing.assert_allclose(line_boxes(GRIPPER, openings, extension), boxes)
         fast = body_hits(points, cands, index, boxes)
         slow = brute_force_hits(points, cands, boxes)
         assert 0 < slow.sum() < slow.size  # a meaningful mix of hits and misses
         np.testing.assert_array_equal(fast, slow)
+    boxes = line_boxes(GRIPPER, openings)
     radius = np.full(n_lines, GRIPPER.jaw_length_m)
     half = np.minimum(lines.half_lengths, GRIPPER.max_opening_m / 2)
-    fast = body_hits(points, cands, index, GRIPPER.boxes(), radius, half)
-    slow = brute_force_hits(points, cands, GRIPPER.boxes(), radius, half)
+    fast = body_hits(points, cands, index, boxes, radius, half)
+    slow = brute_force_hits(points, cands, boxes, radius, half)
     assert slow.sum() > 0
     np.testing.assert_array_equal(fast, slow)
+
+
+def test_approach_opening_clears_the_contacts_within_the_stroke() -> None:
+    half = np.array([0.005, 0.02, 0.035])
+    np.testing.assert_allclose(approach_openings(half, GRIPPER, CONFIG), [0.03, 0.06, 0.08])
+    cands = one_line(0.02)
+    eliminate(cands, two_faces(0.02), GRIPPER, CONFIG)
+    grasp = cands.grasp(0)
+    assert grasp.approach_width == pytest.approx(0.06) and grasp.width == pytest.approx(0.04)
 
 
 def test_counts_follow_the_rule_order() -> None:

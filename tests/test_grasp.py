@@ -37,6 +37,7 @@ def test_axes_are_the_rotation_columns_and_contacts_straddle_p_g() -> None:
         ({"position": [0.0, np.nan, 0.0]}, "finite"),
         ({"width": -0.01}, "width"),
         ({"width": float("inf")}, "width"),
+        ({"width": 0.05, "approach_width": 0.04}, "approach_width"),
     ],
 )
 def test_invalid_grasps_are_refused(kwargs, needle) -> None:
@@ -45,8 +46,10 @@ def test_invalid_grasps_are_refused(kwargs, needle) -> None:
 
 
 def test_json_round_trip() -> None:
-    g = make(factors={"h_alpha": 0.9, "h_beta": 0.8}, source=3, family="slide")
+    g = make(factors={"h_alpha": 0.9, "h_beta": 0.8}, source=3, family="slide", approach_width=0.06)
     back = Grasp.from_dict(json.loads(json.dumps(g.to_dict())))
+    assert back.approach_width == 0.06
+    assert np.isnan(Grasp.from_dict(make().to_dict()).approach_width)  # unknown stays unknown
     np.testing.assert_allclose(back.position, g.position)
     np.testing.assert_allclose(back.rotation, g.rotation)
     assert (back.width, back.score, back.factors, back.source, back.family) == (

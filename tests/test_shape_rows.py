@@ -1,4 +1,4 @@
-"""Per-row superquadric evaluation: inside-outside, contact distance and Gaussian curvature."""
+"""Per-row superquadric evaluation: inside-outside, contact distance and gradient."""
 
 from __future__ import annotations
 
@@ -42,22 +42,14 @@ def test_contact_distance_on_known_shapes() -> None:
     assert t[3] == pytest.approx(0.05, rel=1e-9)
 
 
-def test_gaussian_curvature_of_sphere_ellipsoid_and_cylinder_side() -> None:
-    sphere = Superquadric(1.0, 1.0, [0.02, 0.02, 0.02])
-    ellipsoid = Superquadric(1.0, 1.0, [0.05, 0.02, 0.03])
-    cylinder = Superquadric(0.1, 1.0, [0.03, 0.03, 0.05])
-    rows = ShapeRows.of([sphere, ellipsoid, cylinder], np.array([0, 0, 1, 1, 2]))
-    pts = np.array(
-        [
-            [0.02, 0.0, 0.0],
-            [0.02 / np.sqrt(3)] * 3,
-            [0.05, 0.0, 0.0],  # tip of the long axis: K = a^2 / (b^2 c^2)
-            [0.0, 0.02, 0.0],  # tip of the middle axis: K = b^2 / (a^2 c^2)
-            [0.03, 0.0, 0.0],  # cylinder side: one principal curvature is zero
-        ]
-    )
-    k = rows.gaussian_curvature(pts)
-    np.testing.assert_allclose(k[:2], 1 / 0.02**2, rtol=1e-4)
-    assert k[2] == pytest.approx(0.05**2 / (0.02**2 * 0.03**2), rel=1e-4)
-    assert k[3] == pytest.approx(0.02**2 / (0.05**2 * 0.03**2), rel=1e-4)
-    assert abs(k[4]) < 1e-3 / 0.03**2
+def test_gradient_points_along_the_exact_normal() -> None:
+    rng = np.random.default_rng(1)
+    index = rng.integers(0, len(SQS), size=50)
+    rows = ShapeRows.of(SQS, index)
+    directions = rng.normal(size=(50, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    on_surface = rows.contact_distance(np.zeros((50, 3)), directions)[:, None] * directions
+    grad = rows.gradient(on_surface)
+    grad /= np.linalg.norm(grad, axis=1, keepdims=True)
+    exact = np.array([SQS[i].normals(p[None])[0] for i, p in zip(index, on_surface, strict=True)])
+    np.testing.assert_allclose(grad, exact, atol=1e-5)

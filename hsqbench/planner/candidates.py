@@ -44,6 +44,7 @@ class ClosingLines:
         family: (L,) how the line was made: ``axis`` (a principal axis), ``slide`` (shifted
             parallel to a principal axis), ``rotate`` (rotated about z through the centre) or
             ``rotate+slide``.
+        openings: (L,) gripper opening on approach, metres (set by elimination; NaN before).
     """
 
     centres: NDArray[np.float64]
@@ -53,6 +54,11 @@ class ClosingLines:
     source: NDArray[np.int64]
     axis: NDArray[np.int64]
     family: NDArray[np.str_]
+    openings: NDArray[np.float64] = field(default=None)  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        if self.openings is None:
+            self.openings = np.full(self.half_lengths.shape[0], np.nan)
 
     def __len__(self) -> int:
         return int(self.half_lengths.shape[0])
@@ -78,6 +84,7 @@ class ClosingLines:
                     "source",
                     "axis",
                     "family",
+                    "openings",
                 )
             )
         )
@@ -192,6 +199,7 @@ class CandidateSet:
             position=self.lines.centres[line],
             rotation=rotation,
             width=2.0 * float(self.lines.half_lengths[line]),
+            approach_width=float(self.lines.openings[line]),
             score=float(self.scores[index]),
             factors={k: float(v[index]) for k, v in self.factors.items()},
             source=int(self.lines.source[line]),

@@ -75,7 +75,7 @@ class GraspConfig:
     support_radius_m: float = 0.01
     contact_depth_m: float = 0.01
     support_min_points: int = 5
-    support_min_fraction: float = 0.25
+    support_min_fraction: float = 0.1
     support_max_tilt_deg: float = 30.0
     approach_distance_m: float = 0.05
     table_clearance_m: float = 0.003

@@ -16,6 +16,11 @@ that removed it (``CandidateSet.rejected_by``):
    finger can push on, i.e. the normal of the plane fitted to them must be within
    ``support_max_tilt_deg`` of the line. This removes lines whose contact is an edge of the
    object (e.g. a superquadric fitted to one face of a box, gripped across that face's length).
+The gripper approaches open to ``min(l_w, 2 h + 2 contact_depth_m)`` (``approach_openings``,
+kept as ``ClosingLines.openings`` and ``Grasp.approach_width``): its fingers then clear the contact
+surface (noise and fit error included) and close only through it, so the open fingers are the
+whole finger volume to check, and no wider opening reaches into neighbours or the table.
+
 3. ``table``: with a support plane ``a x + b y + c z + d = 0`` (unit normal toward the free side),
    a pose whose fingers or palm (palm swept back by ``approach_distance_m``) come closer than
    ``table_clearance_m`` to the plane, or cross it, goes.
@@ -23,10 +28,9 @@ that removed it (``CandidateSet.rejected_by``):
    the line; cloud points between its end planes but outside it are obstacles, and a pose whose
    gripper body (two open fingers and the palm) holds any of them goes.
 5. ``sweep`` (addition): the paper only looks between the end planes. Any cloud point in the
-   volume the hand sweeps also removes the pose: the open fingers; the palm swept back by
-   ``approach_distance_m`` (the straight-line approach from the pre-grasp pose); and the fingers'
-   closing path from ``l_w`` down to ``contact_depth_m`` beyond each contact (nearer points are
-   the contact surface itself). E.g. the body of a mug beside a finger that grips its handle.
+   volume the hand sweeps also removes the pose: the open fingers, and the palm swept back by
+   ``approach_distance_m`` (the straight-line approach from the pre-grasp pose). E.g. the body of
+   a mug beside a finger that grips its handle.
 
 Rules 4 and 5 are exact for the box model of the gripper and cost O(lines x points), not
 O(candidates x points): in the frame of a line (``s`` along it, polar ``r, theta`` about it) a
@@ -54,7 +58,7 @@ RULE_DESCRIPTIONS = {
     "support": "too few cloud points at a contact, or no surface there facing the finger",
     "table": "fingers or palm would enter the support plane",
     "collision": "paper's test: object points outside the jaw's reach between the fingers",
-    "sweep": "a cloud point in the path of the fingers (approach, closing) or the palm (approach)",
+    "sweep": "a cloud point in the open fingers or in the palm's approach path",
 }
 
 #: Line-by-point pairs processed at once (memory bound: a few arrays of this many float64).
@@ -174,26 +178,48 @@ def support_stats(
     return SupportStats(counts, cos_tilt)
 
 
+def approach_openings(
+    half_lengths: NDArray, gripper: GripperModel, config: GraspConfig
+) -> NDArray[np.float64]:
+    """Opening of the gripper on approach for each line, metres: the contacts plus
+    ``contact_depth_m`` on each side (the fingers then clear the contact surface, noise and fit
+    error included, and close only through it), at most ``l_w``."""
+    return np.minimum(2.0 * (half_lengths + config.contact_depth_m), gripper.max_opening_m)
+
+
+def line_boxes(
+    gripper: GripperModel, openings: NDArray, palm_extension_m: float = 0.0
+) -> NDArray[np.float64]:
+    """The gripper's boxes for each line's opening, grasp frame: (n, 3, 2, 3), see
+    :meth:`GripperModel.boxes` (``[finger+x, finger-x, palm]``, each ``[lower, upper]``)."""
+    base = gripper.boxes(palm_extension_m=palm_extension_m)
+    boxes = np.broadcast_to(base, (openings.size, *base.shape)).copy()
+    half = 0.5 * openings
+    boxes[:, 0, 0, 0], boxes[:, 0, 1, 0] = half, half + gripper.finger_thickness_m
+    boxes[:, 1, 0, 0], boxes[:, 1, 1, 0] = -half - gripper.finger_thickness_m, -half
+    return boxes
+
+
 def table_clear(
     cands: CandidateSet,
     lines: NDArray[np.int64],
+    boxes: NDArray,
     plane: NDArray,
-    gripper: GripperModel,
-    config: GraspConfig,
+    clearance: float,
 ) -> NDArray[np.bool_]:
-    """(len(lines), R): the swept gripper boxes of each roll stay on the free side of ``plane``."""
-    boxes = gripper.boxes(palm_extension_m=config.approach_distance_m)
-    # The 8 corners of each of the 3 boxes, grasp frame: (24, 3).
+    """(len(lines), R): each line's ``boxes`` (n, 3, 2, 3) stay ``clearance`` metres on the free
+    side of ``plane`` at every roll (a box is on one side iff its 8 corners are)."""
     pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
-    corners = np.concatenate([box[pick, [0, 1, 2]] for box in boxes])
+    # Corners (n, 24, 3): box b, corner c takes coordinate k from boxes[:, b, pick[c, k], k].
+    corners = boxes[:, :, pick, np.arange(3)].reshape(lines.size, 8 * boxes.shape[1], 3)
     L = cands.lines
     frames = roll_frames(L.directions[lines], L.approach0[lines], cands.roll_angles)
     normal, offset = plane[:3], plane[3]
     # n . (P_G + R c) + d for every corner: (lines, R, 24).
     base = L.centres[lines] @ normal + offset
     along = np.einsum("k,lrkj->lrj", normal, frames)
-    dist = base[:, None, None] + np.einsum("lrj,cj->lrc", along, corners)
-    return np.all(dist >= config.table_clearance_m, axis=2)
+    dist = base[:, None, None] + np.einsum("lrj,lcj->lrc", along, corners)
+    return np.all(dist >= clearance, axis=2)
 
 
 def _mark_arcs(
@@ -249,18 +275,21 @@ def body_hits(
     boxes: NDArray,
     obstacle_radius: NDArray | None = None,
     obstacle_half_height: NDArray | None = None,
-    closing_from: NDArray | None = None,
 ) -> NDArray[np.bool_]:
-    """(len(lines), R): whether any obstacle point lies inside any of ``boxes`` at each roll.
+    """(len(lines), R): whether any obstacle point lies inside any of each line's ``boxes``
+    (n, k, 2, 3), grasp frame, at each roll.
 
+    The boxes' extents across the closing axis (y, z) must be the same for every line and
+    symmetric in y; their extents along it may differ (the fingers follow each line's opening).
     Obstacles are all ``points``, or, when ``obstacle_radius`` and ``obstacle_half_height`` (per
     line) are given, only the points with ``|s| <= half_height`` and ``r > radius`` (the paper's
-    collision cylinder). With ``closing_from`` (per line, metres) the fingers' closing sweep is a
-    further region: the cross-section of the finger ``boxes[0]`` over
-    ``closing_from <= |s| <= `` its inner face, on both sides.
+    collision cylinder).
     """
-    if not np.allclose(boxes[:, 0, 1], -boxes[:, 1, 1]):
-        raise ValueError("gripper boxes must be symmetric about the closing-approach plane")
+    if not (
+        np.allclose(boxes[:, :, :, 1:], boxes[:1, :, :, 1:])
+        and np.allclose(boxes[:, :, 0, 1], -boxes[:, :, 1, 1])
+    ):
+        raise ValueError("box cross-sections must be shared by all lines and symmetric in y")
     n_roll = cands.n_roll
     out = np.zeros((lines.size, n_roll), dtype=bool)
     if lines.size == 0 or points.shape[0] == 0:
@@ -280,13 +309,11 @@ def body_hits(
         r = np.sqrt(r2[pt, ln])
         n = idx.size
         diff = np.zeros((n, 3 * n_roll + 1), dtype=np.int64)
-        for box in boxes:
-            in_x = (s_k >= box[0, 0]) & (s_k <= box[1, 0])
-            _mark_arcs(in_x, r, u_k, v_k, ln, box, n_roll, diff)
-        if closing_from is not None:
-            a = np.abs(s_k)
-            in_x = (a >= closing_from[sl][ln]) & (a <= boxes[0][0, 0])
-            _mark_arcs(in_x, r, u_k, v_k, ln, boxes[0], n_roll, diff)
+        chunk_boxes = boxes[sl]
+        for b in range(boxes.shape[1]):
+            x_lo, x_hi = chunk_boxes[ln, b, 0, 0], chunk_boxes[ln, b, 1, 0]
+            in_x = (s_k >= x_lo) & (s_k <= x_hi)
+            _mark_arcs(in_x, r, u_k, v_k, ln, boxes[0, b], n_roll, diff)
         covered = np.cumsum(diff, axis=1)[:, : 3 * n_roll] > 0
         out[sl] = covered.reshape(n, 3, n_roll).any(axis=1)
     return out
@@ -331,10 +358,13 @@ def eliminate(
     facing = stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
     apply("support", lines, np.any((stats.counts < kappa) | ~facing, axis=1))
 
+    openings = approach_openings(L.half_lengths, gripper, config)
+    L.openings = openings
     lines = alive_lines()
+    swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
     if support_plane is not None:
-        clear = table_clear(cands, lines, np.asarray(support_plane, float), gripper, config)
-        apply("table", lines, ~clear)
+        plane = np.asarray(support_plane, float)
+        apply("table", lines, ~table_clear(cands, lines, swept, plane, config.table_clearance_m))
     else:
         remaining["table"] = remaining["support"]
 
@@ -342,12 +372,12 @@ def eliminate(
     lines = alive_lines()
     half_height = np.minimum(L.half_lengths[lines], 0.5 * gripper.max_opening_m)
     radius = np.full(lines.size, gripper.jaw_length_m)
-    apply("collision", lines, body_hits(points, cands, lines, gripper.boxes(), radius, half_height))
+    body = line_boxes(gripper, openings[lines])
+    apply("collision", lines, body_hits(points, cands, lines, body, radius, half_height))
 
     lines = alive_lines()
-    boxes = gripper.boxes(palm_extension_m=config.approach_distance_m)
-    closing_from = L.half_lengths[lines] + config.contact_depth_m
-    apply("sweep", lines, body_hits(points, cands, lines, boxes, closing_from=closing_from))
+    swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
+    apply("sweep", lines, body_hits(points, cands, lines, swept))
 
     names = np.array((KEPT, *REJECTION_REASONS), dtype=cands.rejected_by.dtype)
     cands.rejected_by = names[code.ravel()]

@@ -34,12 +34,16 @@ class Grasp:
         position: ``P_G`` in world metres, shape (3,).
         rotation: 3x3 rotation, columns (closing axis, third axis, approach axis), world frame.
         width: distance between the two contacts along the closing axis, metres (the opening
-            at which the pads touch the modelled surface; approach with the gripper open wider).
+            at which the pads touch the modelled surface).
         score: ``h`` in [0, 1]; the product of ``factors``.
         factors: the score factors by name (``h_alpha``, ``h_beta``, ``h_gamma`` and, unless the
             scene is packed, ``h_delta``); empty for planners that do not report them.
         source: index of the hidden superquadric that made the grasp (-1 if none).
         family: which candidate family produced it (``axis``, ``slide``, ``rotate``, ...).
+        approach_width: the opening to approach with, metres: wider than ``width`` by a margin
+            for noise and fit error. The planner checked collisions (object, neighbours, table)
+            for the fingers at this opening, so open the gripper to it, not wider. NaN when the
+            planner does not say (then the harness chooses).
     """
 
     position: NDArray[np.float64]
@@ -49,6 +53,7 @@ class Grasp:
     factors: dict[str, float] = field(default_factory=dict)
     source: int = -1
     family: str = ""
+    approach_width: float = float("nan")
 
     def __post_init__(self) -> None:
         position = np.asarray(self.position, dtype=np.float64).reshape(3)
@@ -65,7 +70,13 @@ class Grasp:
             raise ValueError(f"grasp width must be a finite length >= 0 m, got {self.width}")
         object.__setattr__(self, "position", position)
         object.__setattr__(self, "rotation", rotation)
+        if not (np.isnan(self.approach_width) or self.approach_width >= self.width):
+            raise ValueError(
+                f"grasp approach_width ({self.approach_width} m) must be at least its width "
+                f"({self.width} m)"
+            )
         object.__setattr__(self, "width", float(self.width))
+        object.__setattr__(self, "approach_width", float(self.approach_width))
         object.__setattr__(self, "score", float(self.score))
 
     @property
@@ -87,6 +98,7 @@ class Grasp:
             "position": self.position.tolist(),
             "rotation": self.rotation.tolist(),
             "width": self.width,
+            "approach_width": None if np.isnan(self.approach_width) else self.approach_width,
             "score": self.score,
             "factors": dict(self.factors),
             "source": self.source,
@@ -100,6 +112,9 @@ class Grasp:
             position=np.asarray(data["position"]),
             rotation=np.asarray(data["rotation"]),
             width=data["width"],
+            approach_width=float("nan")
+            if data.get("approach_width") is None
+            else float(data["approach_width"]),
             score=data["score"],
             factors={k: float(v) for k, v in data.get("factors", {}).items()},
             source=int(data.get("source", -1)),

@@ -1,7 +1,8 @@
 """Candidate scoring (paper, stage two): ``h = h_alpha * h_beta * h_gamma * h_delta``.
 
 - ``h_alpha = exp(-alpha_hat^2 / q_alpha)``: goodness of the superquadric's fit, with
-  ``alpha_hat = alpha / alpha_unit_m``;
+  ``alpha_hat = alpha / alpha_unit_m`` (0.1 m: 1/e at a 4.5 mm mean error, 0.9 at the cameras'
+  noise level);
 - ``h_beta = beta^2``: its coverage;
 - ``h_gamma = exp(-gamma^2 / q_gamma)``: flatness at the contacts, with the dimensionless
   ``gamma = mean(K) * h^2``: the mean Gaussian curvature ``K`` (1/m^2) over the pad-sized patch
@@ -27,7 +28,7 @@ from numpy.typing import NDArray
 from hsqbench.planner.candidates import KEPT, CandidateSet, ClosingLines
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.shape_rows import ShapeRows
-from hsqbench.superquadric import Superquadric
+from hsqbench.superquadric import Superquadric, gaussian_curvature_local
 
 FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")
 #: The raw measures behind the factors: alpha (m), beta, gamma (dimensionless), delta (m).
@@ -81,7 +82,7 @@ def contact_curvature(
     if np.any(on):
         sub = shapes[rows[on]]
         hit = starts[on] + sub.contact_distance(starts[on], dirs[on])[:, None] * dirs[on]
-        curv[on] = sub.gaussian_curvature(hit)
+        curv[on] = gaussian_curvature_local(hit, sub.eps1, sub.eps2, sub.scale)
     curv = curv.reshape(n, s)
     any_on = np.any(on.reshape(n, s), axis=1)
     mean = np.full(n, np.inf)

@@ -1,7 +1,7 @@
 """Many superquadrics evaluated at once: one superquadric's shape per row.
 
 Stage two asks the same questions of points that belong to different superquadrics (where does a
-line leave the surface, which way does the surface face there, how curved is it). Giving each
+line leave the surface, which way does the surface face there). Giving each
 row its own ``scale``, ``eps1`` and ``eps2`` answers them for all lines in one vectorised call
 instead of a Python loop over superquadrics. Points are in each row's local frame.
 """
@@ -19,10 +19,9 @@ from hsqbench.superquadric import Superquadric, _phi
 
 #: Bisection steps for contact distances: 2^-40 of the superquadric's size, far below noise.
 _BISECTION_STEPS = 40
-#: Finite-difference steps, as fractions of the row's largest (gradient) or smallest (Hessian)
-#: semi-axis: near the optimum for central differences of a function of order 1 in float64.
+#: Finite-difference step for the gradient, as a fraction of the row's largest semi-axis: near the
+#: optimum for central differences of a function of order 1 in float64.
 _GRAD_STEP = 1e-6
-_HESS_STEP = 1e-4
 
 
 @dataclass(frozen=True)
@@ -72,39 +71,3 @@ class ShapeRows:
                 self.inside_outside_pow(local + e) - self.inside_outside_pow(local - e)
             ) / (2 * step)
         return grad
-
-    def gaussian_curvature(self, local: NDArray) -> NDArray[np.float64]:
-        """Gaussian curvature (1/m^2) at local surface points (n, 3).
-
-        For the implicit surface ``G = 1``: ``K = g^T adj(H) g / |g|^4`` with ``g`` the gradient
-        and ``H`` the Hessian of ``G`` (central differences on the stable ``G``).
-        """
-        h = _HESS_STEP * np.min(self.scale, axis=1)
-        n = local.shape[0]
-        steps = np.zeros((3, n, 3))
-        for i in range(3):
-            steps[i, :, i] = h
-        g0 = self.inside_outside_pow(local)
-        plus = [self.inside_outside_pow(local + steps[i]) for i in range(3)]
-        minus = [self.inside_outside_pow(local - steps[i]) for i in range(3)]
-        grad = np.empty((n, 3))
-        H = np.empty((n, 3, 3))
-        for i in range(3):
-            grad[:, i] = (plus[i] - minus[i]) / (2 * h)
-            H[:, i, i] = (plus[i] - 2 * g0 + minus[i]) / (h * h)
-            for j in range(i + 1, 3):
-                H[:, i, j] = H[:, j, i] = (
-                    self.inside_outside_pow(local + steps[i] + steps[j])
-                    - self.inside_outside_pow(local + steps[i] - steps[j])
-                    - self.inside_outside_pow(local - steps[i] + steps[j])
-                    + self.inside_outside_pow(local - steps[i] - steps[j])
-                ) / (4 * h * h)
-        cof = np.empty_like(H)
-        cof[:, 0, 0] = H[:, 1, 1] * H[:, 2, 2] - H[:, 1, 2] ** 2
-        cof[:, 1, 1] = H[:, 0, 0] * H[:, 2, 2] - H[:, 0, 2] ** 2
-        cof[:, 2, 2] = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] ** 2
-        cof[:, 0, 1] = cof[:, 1, 0] = H[:, 0, 2] * H[:, 1, 2] - H[:, 0, 1] * H[:, 2, 2]
-        cof[:, 0, 2] = cof[:, 2, 0] = H[:, 0, 1] * H[:, 1, 2] - H[:, 0, 2] * H[:, 1, 1]
-        cof[:, 1, 2] = cof[:, 2, 1] = H[:, 0, 1] * H[:, 0, 2] - H[:, 0, 0] * H[:, 1, 2]
-        num = np.einsum("ni,nij,nj->n", grad, cof, grad)
-        return num / np.einsum("ni,ni->n", grad, grad) ** 2
