@@ -1,0 +1,148 @@
+"""``hsqbench trial``: run one isolated trial or one packed round in MuJoCo and print it."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+HELP = "run one grasp trial (isolated object) or one packed round in the simulator"
+
+_EPILOG = """\
+An isolated trial places --object at the seed's random upright pose and makes one attempt.
+A packed round (--scene packed) places five objects (--objects, or drawn by the seed) and makes
+attempts until the table is clear or two attempts in a row fail.
+
+Outcomes: success, no_grasp_found, unreachable, collision_on_approach, empty_grasp, dropped,
+sim_unstable. The same seed and config give the same outcomes.
+
+Exit status: 0 when the trial ran (whatever its outcome), 2 on bad input.
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = _EPILOG
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.add_argument(
+        "--object", default=None, metavar="NAME", help="object of an isolated trial"
+    )
+    parser.add_argument("--seed", type=int, default=0, metavar="N", help="the trial's seed")
+    parser.add_argument(
+        "--scene", choices=("isolated", "packed"), default="isolated", help="kind of trial"
+    )
+    parser.add_argument(
+        "--objects",
+        nargs="+",
+        default=None,
+        metavar="NAME",
+        help="objects of a packed round (default: drawn by the seed)",
+    )
+    parser.add_argument("--planner", default="hsq", metavar="NAME", help="registered planner")
+    parser.add_argument(
+        "--config",
+        default="trial",
+        metavar="PATH",
+        help="trial config: a name in configs/ or a YAML path (default: trial)",
+    )
+    parser.add_argument(
+        "--sensor",
+        choices=("cameras", "surface"),
+        default=None,
+        help="override the config's sensor (surface: fast stand-in without rendering)",
+    )
+    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result")
+    parser.add_argument(
+        "--rerun", type=Path, default=None, metavar="OUT.rrd", help="record the episode for Rerun"
+    )
+
+
+def _check_names(args: argparse.Namespace) -> None:
+    from hsqbench.assets.library import object_names
+    from hsqbench.cli import CommandError
+    from hsqbench.planner import planner_names
+
+    if args.planner not in planner_names():
+        raise CommandError(
+            f"unknown planner {args.planner!r}; choose one of: {', '.join(planner_names())}"
+        )
+    known = object_names()
+    if args.scene == "isolated":
+        if args.objects:
+            raise CommandError("--objects is for --scene packed; use --object for one object")
+        if args.object is None:
+            raise CommandError(
+                f"--object is required for an isolated trial; choose one of: {', '.join(known)}"
+            )
+        wanted = [args.object]
+    else:
+        if args.object is not None:
+            raise CommandError("--object is for isolated trials; use --objects with --scene packed")
+        wanted = args.objects or []
+    unknown = [n for n in wanted if n not in known]
+    if unknown:
+        raise CommandError(f"unknown object(s) {unknown}; choose from: {', '.join(known)}")
+
+
+def _recorder(path: Path | None):
+    if path is None:
+        return None
+    from hsqbench.cli import CommandError
+
+    try:
+        from hsqbench.viz.episode import EpisodeRecorder
+    except ImportError as exc:
+        raise CommandError(
+            f"--rerun is not available yet: the Rerun episode recorder (hsqbench.viz.episode) "
+            f"is not installed in this version ({exc})"
+        ) from None
+    return EpisodeRecorder(path)
+
+
+def _line(i: int, a) -> str:
+    score = f"{a.score:.3f}" if a.score == a.score else "  -  "
+    width = f"{a.width_m * 1000:3.0f} mm" if a.width_m == a.width_m else "   -  "
+    return (
+        f"attempt {i + 1}: {a.outcome!s:21s} target={a.target or '-':22s} rank={a.rank_executed:2d} "
+        f"score={score} width={width}  perception {a.perception_s:.2f} s, planning "
+        f"{a.planning_s:.2f} s, execution {a.execution_s:.2f} s  ({a.detail})"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from hsqbench.sim.trial import load_trial_config, run_isolated_trial, run_packed_round
+
+    _check_names(args)
+    config = load_trial_config(args.config)
+    if args.sensor is not None:
+        config = replace(config, sensor=args.sensor)
+    recorder = _recorder(args.rerun)
+    if args.scene == "isolated":
+        result = run_isolated_trial(args.object, args.seed, args.planner, config, recorder=recorder)
+    else:
+        result = run_packed_round(args.objects, args.seed, args.planner, config, recorder=recorder)
+    if recorder is not None and hasattr(recorder, "close"):
+        recorder.close()
+    for i, a in enumerate(result.attempts):
+        print(_line(i, a))
+    if args.scene == "isolated":
+        print(
+            f"isolated trial: {result.object}, seed {result.seed}, planner {result.planner}: "
+            f"{'success' if result.success else 'failure'}"
+        )
+    else:
+        n_ok = sum(a.success for a in result.attempts)
+        print(
+            f"packed round, seed {result.seed}, planner {result.planner}: grasps "
+            f"{n_ok}/{len(result.attempts)} successful, cleared {len(result.objects_cleared)}/"
+            f"{result.objects_presented} ({', '.join(result.objects_cleared) or 'none'}) of "
+            f"{', '.join(result.objects)}"
+        )
+    if args.json is not None:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(result.to_dict(), indent=2) + "\n")
+        print(f"wrote {args.json}")
+    if args.rerun is not None:
+        print(f"wrote {args.rerun}")
+    return 0

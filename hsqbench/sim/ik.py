@@ -1,0 +1,445 @@
+"""Inverse kinematics of the Panda's TCP with mink, on a private copy of the simulation state.
+
+A target is a :class:`Pose` of the TCP site (``tcp``: x = closing axis, z = approach axis, at the
+grasp centre), so a planner grasp ``(rotation, position)`` is a TCP target as is.
+
+The solver is mink's differential IK iterated to convergence (Gauss-Newton with
+Levenberg-Marquardt damping). Each iteration solves a QP for the joint step ``dq``: minimise
+``|J dq + e|^2_W + c_p |q + dq - q_home|^2``, with ``e`` the 6-D pose error of the TCP
+(``mink.FrameTask``) and a light posture term (``mink.PostureTask``) that settles the seventh
+degree of freedom near home, subject to
+
+- ``mink.ConfigurationLimit``: every joint stays inside its range;
+- ``mink.VelocityLimit``: no joint moves more than ``max_step_rad`` per iteration (the
+  integration step is 1, so a velocity is a step). A full Gauss-Newton step toward a target
+  40 cm away jumps into a far, often joint-limited, branch; small steps follow the error down;
+- ``mink.CollisionAvoidanceLimit`` between the arm links (link1-link6) and the table and bin:
+  the elbow and forearm keep ``link_clearance_m`` from them while the arm moves toward a low
+  target.
+
+Only the arm moves: the posture cost is zero on every other degree of freedom and the frame task
+does not depend on them, so the LM damping keeps them fixed (object and finger coordinates stay
+as copied from the simulation).
+
+Acceptance: a solution counts only when the TCP is within ``position_tolerance_m`` and
+``orientation_tolerance_deg`` of the target and no robot collision geom, hand included, comes
+closer than ``clearance_m`` to the table or bin (``mj_geomDistance`` after solving; for the hand
+and link7, which are rigid with the TCP, this is a property of the target itself). Restarts
+begin at the caller's seed, then the home posture, then random postures around home drawn from
+the caller's generator; a target reached with the hand in an obstacle twice is given up early.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import mink
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hsqbench.sim.robot import Panda
+
+#: Rotation by pi about the TCP's approach axis: the other half of a parallel-jaw grasp.
+FLIP_ABOUT_APPROACH = np.diag([-1.0, -1.0, 1.0])
+
+
+@dataclass(frozen=True)
+class IKConfig:
+    """Settings of :class:`ArmIK` (reasons in ``configs/trial.yaml``).
+
+    Attributes:
+        position_tolerance_m: largest accepted TCP position error, metres.
+        orientation_tolerance_deg: largest accepted TCP orientation error, degrees.
+        converged_fraction: iterate until both errors are below this fraction of the tolerances.
+        max_iterations: IK iterations per restart.
+        max_step_rad: largest change of any joint in one iteration, rad.
+        stall_iterations: stop when the error fell by less than 1 % over this many iterations.
+        restarts: solves from different seeds before a pose is declared unreachable.
+        max_blocked_restarts: stop after this many solutions that reach the pose with the hand
+            (or link7) touching an obstacle.
+        seed_spread_rad: standard deviation of the random seeds around the home posture, rad.
+        position_cost, orientation_cost: weights of the TCP pose error (per metre, per radian).
+        posture_cost: weight of the pull toward the home posture (per radian).
+        lm_damping: Levenberg-Marquardt damping of the frame task (scaled by the squared error).
+        damping: LM damping on every degree of freedom (keeps the QP well posed).
+        solver: QP solver for ``mink.solve_ik``.
+        clearance_m: smallest distance between robot collision geoms and obstacles.
+        link_clearance_m: distance kept between the arm links (not the hand) and obstacles
+            while iterating (mink's ``CollisionAvoidanceLimit``); 0 turns it off.
+        link_detection_m: obstacles closer than this to a link are constrained.
+        max_waypoint_jump_rad: largest joint change between successive waypoints of a line;
+            a larger one means the solution jumped branches.
+    """
+
+    position_tolerance_m: float = 0.003
+    orientation_tolerance_deg: float = 2.0
+    converged_fraction: float = 0.25
+    max_iterations: int = 60
+    max_step_rad: float = 0.2
+    stall_iterations: int = 8
+    restarts: int = 6
+    max_blocked_restarts: int = 2
+    seed_spread_rad: float = 0.6
+    position_cost: float = 1.0
+    orientation_cost: float = 0.5
+    posture_cost: float = 0.01
+    lm_damping: float = 0.01
+    damping: float = 1e-6
+    solver: str = "daqp"
+    clearance_m: float = 0.002
+    link_clearance_m: float = 0.01
+    link_detection_m: float = 0.05
+    max_waypoint_jump_rad: float = 0.35
+
+    def __post_init__(self) -> None:
+        for name in (
+            "position_tolerance_m",
+            "orientation_tolerance_deg",
+            "max_step_rad",
+            "max_waypoint_jump_rad",
+        ):
+            if getattr(self, name) <= 0:
+                raise ValueError(f"ik.{name} must be positive, got {getattr(self, name)}")
+        if not 0 < self.converged_fraction <= 1:
+            raise ValueError(
+                f"ik.converged_fraction must be in (0, 1], got {self.converged_fraction}"
+            )
+        if self.max_iterations < 1 or self.restarts < 1:
+            raise ValueError("ik.max_iterations and ik.restarts must be at least 1")
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A rigid pose in the world frame: ``position`` (3,) metres, ``rotation`` (3, 3) whose
+    columns are the frame's axes."""
+
+    position: NDArray[np.float64]
+    rotation: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        p = np.asarray(self.position, dtype=float).reshape(3)
+        r = np.asarray(self.rotation, dtype=float).reshape(3, 3)
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(r))):
+            raise ValueError("pose position and rotation must be finite")
+        if np.max(np.abs(r.T @ r - np.eye(3))) > 1e-6 or np.linalg.det(r) < 0:
+            raise ValueError("pose rotation must be a proper rotation matrix")
+        object.__setattr__(self, "position", p)
+        object.__setattr__(self, "rotation", r)
+
+    def moved(self, offset: ArrayLike) -> Pose:
+        """The same orientation, translated by ``offset`` (3,) metres in the world frame."""
+        return Pose(self.position + np.asarray(offset, dtype=float), self.rotation)
+
+    def flipped(self) -> Pose:
+        """Rotated by pi about its own z axis (the same parallel-jaw grasp)."""
+        return Pose(self.position, self.rotation @ FLIP_ABOUT_APPROACH)
+
+
+def rotation_angle_deg(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    """Geodesic angle between two rotation matrices, degrees."""
+    c = 0.5 * (np.trace(a.T @ b) - 1.0)
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+
+
+def line_poses(start: Pose, end_position: ArrayLike, n_segments: int) -> list[Pose]:
+    """``n_segments + 1`` poses from ``start`` to ``end_position`` on a straight line, with the
+    start's orientation (both ends included)."""
+    if n_segments < 1:
+        raise ValueError(f"a line needs at least one segment, got {n_segments}")
+    end = np.asarray(end_position, dtype=float)
+    s = np.linspace(0.0, 1.0, n_segments + 1)
+    return [Pose((1 - t) * start.position + t * end, start.rotation) for t in s]
+
+
+@dataclass
+class IKSolution:
+    """The answer for one target.
+
+    Attributes:
+        q: arm joint angles (7,), radians (the best found, also when not ``ok``).
+        ok: within the tolerances and clear of obstacles.
+        position_error_m, orientation_error_deg: TCP error of ``q``.
+        clearance_m: smallest robot-obstacle distance at ``q`` (capped at the check radius).
+        restarts: solves run.
+        iterations: IK iterations over all restarts.
+        reason: why it failed, in words (``""`` when ``ok``).
+    """
+
+    q: NDArray[np.float64]
+    ok: bool
+    position_error_m: float
+    orientation_error_deg: float
+    clearance_m: float = float("inf")
+    restarts: int = 0
+    iterations: int = 0
+    reason: str = ""
+
+
+@dataclass
+class PathSolution:
+    """Joint waypoints (K, 7) for a sequence of TCP poses; ``ok`` when every one was solved."""
+
+    q: NDArray[np.float64]
+    ok: bool
+    reason: str = ""
+    solutions: list[IKSolution] = field(default_factory=list)
+
+
+class ArmIK:
+    """IK of the Panda's TCP on its own ``MjData`` (the simulation's data is never touched).
+
+    Args:
+        model: the compiled scene (or any model containing the Panda).
+        panda: handles into ``model``.
+        config: solver settings.
+        obstacle_geoms: geom ids the robot must keep ``clearance_m`` from (table, bin).
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        panda: Panda,
+        config: IKConfig,
+        obstacle_geoms: Iterable[int] = (),
+    ) -> None:
+        self.model = model
+        self.panda = panda
+        self.config = config
+        self.configuration = mink.Configuration(model)
+        self.data = self.configuration.data
+        self.frame_task = mink.FrameTask(
+            panda.tcp_site_id,
+            "site",
+            position_cost=config.position_cost,
+            orientation_cost=config.orientation_cost,
+            lm_damping=config.lm_damping,
+        )
+        cost = np.zeros(model.nv)
+        cost[panda.arm_dof_adr] = config.posture_cost
+        self.posture_task = mink.PostureTask(model, cost=cost)
+        self.limits = [
+            mink.ConfigurationLimit(model),
+            mink.VelocityLimit(model, {n: config.max_step_rad for n in panda.arm_joint_names}),
+        ]
+        self.lower, self.upper = model.jnt_range[
+            [model.joint(n).id for n in panda.arm_joint_names]
+        ].T.copy()
+        self.obstacle_geoms = np.asarray(list(obstacle_geoms), dtype=int)
+        robot = np.isin(model.geom_bodyid, panda.body_ids) & (
+            (model.geom_contype > 0) | (model.geom_conaffinity > 0)
+        )
+        # The base link is welded to the table: only moving links can hit it.
+        robot &= model.body_weldid[model.geom_bodyid] != 0
+        self.robot_geoms = np.flatnonzero(robot)
+        # Bodies rigid with the TCP: where they are follows from the target pose alone.
+        link7 = model.body(panda.prefix + "link7").id
+        self._rigid = np.array([panda.hand_body_id, *panda.finger_body_ids, link7])
+        links = self.robot_geoms[~np.isin(model.geom_bodyid[self.robot_geoms], self._rigid)]
+        if len(links) and len(self.obstacle_geoms) and config.link_clearance_m > 0:
+            # Keeps the elbow and forearm off the table while iterating (the hand's own
+            # clearance is a property of the target, checked after solving).
+            self.limits.append(
+                mink.CollisionAvoidanceLimit(
+                    model,
+                    [([int(g) for g in links], [int(g) for g in self.obstacle_geoms])],
+                    minimum_distance_from_collisions=config.link_clearance_m,
+                    collision_detection_distance=config.link_detection_m,
+                )
+            )
+        self._qpos_template = model.qpos0.copy()
+
+    # ---- state ---------------------------------------------------------------------------------
+    def sync(self, data: mujoco.MjData, gripper_width_m: float | None = None) -> None:
+        """Copy the simulation's configuration (objects, fingers) into the IK state. With
+        ``gripper_width_m`` the fingers are placed at that opening (e.g. fully open for an
+        approach)."""
+        q = data.qpos.copy()
+        if gripper_width_m is not None:
+            q[self.panda.finger_qpos_adr] = 0.5 * gripper_width_m
+        self._qpos_template = q
+
+    def _full_q(self, arm_q: NDArray[np.float64]) -> NDArray[np.float64]:
+        q = self._qpos_template.copy()
+        q[self.panda.arm_qpos_adr] = arm_q
+        return q
+
+    def forward(self, arm_q: ArrayLike) -> Pose:
+        """TCP pose at the arm joint angles ``arm_q`` (7,)."""
+        self.configuration.update(self._full_q(np.asarray(arm_q, dtype=float)))
+        sid = self.panda.tcp_site_id
+        return Pose(self.data.site_xpos[sid].copy(), self.data.site_xmat[sid].reshape(3, 3).copy())
+
+    def clearance(self, arm_q: ArrayLike, distmax: float | None = None) -> tuple[float, int]:
+        """Smallest distance (m) between robot collision geoms and the obstacles at ``arm_q``,
+        capped at ``distmax`` (default: 5 x ``clearance_m``), negative when penetrating; and the
+        robot geom concerned (-1 if none within ``distmax``)."""
+        dmax = 5.0 * self.config.clearance_m if distmax is None else distmax
+        self.configuration.update(self._full_q(np.asarray(arm_q, dtype=float)))
+        best, which = dmax, -1
+        for g1 in self.robot_geoms:
+            for g2 in self.obstacle_geoms:
+                d = mujoco.mj_geomDistance(self.model, self.data, int(g1), int(g2), dmax, None)
+                if d < best:
+                    best, which = d, int(g1)
+        return float(best), which
+
+    def hand_extent(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Bounding box ``(lo, hi)`` (3,) of the hand's collision geoms (hand, fingers as
+        synced, and link7, all rigid with the TCP) in the TCP frame, metres."""
+        self.configuration.update(self._full_q(self.panda.home_arm_q))
+        d, sid = self.data, self.panda.tcp_site_id
+        r_tcp, p_tcp = d.site_xmat[sid].reshape(3, 3), d.site_xpos[sid]
+        signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
+        pts = []
+        for g in self.robot_geoms[np.isin(self.model.geom_bodyid[self.robot_geoms], self._rigid)]:
+            centre, half = self.model.geom_aabb[g, :3], self.model.geom_aabb[g, 3:]
+            local = centre + signs * half
+            world = local @ d.geom_xmat[g].reshape(3, 3).T + d.geom_xpos[g]
+            pts.append((world - p_tcp) @ r_tcp)
+        pts = np.concatenate(pts)
+        return pts.min(axis=0), pts.max(axis=0)
+
+    # ---- solving -------------------------------------------------------------------------------
+    def _errors(self, target: Pose) -> tuple[float, float]:
+        sid = self.panda.tcp_site_id
+        pos = self.data.site_xpos[sid]
+        rot = self.data.site_xmat[sid].reshape(3, 3)
+        return float(np.linalg.norm(pos - target.position)), rotation_angle_deg(
+            rot, target.rotation
+        )
+
+    def _descend(
+        self, target: Pose, q0: NDArray[np.float64], posture: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], float, float, int]:
+        cfg = self.config
+        conf = self.configuration
+        conf.update(self._full_q(np.clip(q0, self.lower, self.upper)))
+        self.frame_task.set_target(
+            mink.SE3.from_rotation_and_translation(
+                mink.SO3.from_matrix(target.rotation), target.position
+            )
+        )
+        self.posture_task.set_target(self._full_q(posture))
+        tol_p = cfg.converged_fraction * cfg.position_tolerance_m
+        tol_r = cfg.converged_fraction * cfg.orientation_tolerance_deg
+        tasks = [self.frame_task, self.posture_task]
+        ep, er = self._errors(target)
+        it = 0
+        history: list[float] = []
+        for it in range(1, cfg.max_iterations + 1):
+            if ep < tol_p and er < tol_r:
+                it -= 1
+                break
+            # Stalled (a joint limit or an obstacle in the way): further iterations are wasted.
+            err = ep / cfg.position_tolerance_m + er / cfg.orientation_tolerance_deg
+            history.append(err)
+            if (
+                len(history) > cfg.stall_iterations
+                and err > 0.99 * history[-1 - cfg.stall_iterations]
+            ):
+                break
+            v = mink.solve_ik(conf, tasks, 1.0, cfg.solver, damping=cfg.damping, limits=self.limits)
+            conf.integrate_inplace(v, 1.0)
+            ep, er = self._errors(target)
+        q = conf.q[self.panda.arm_qpos_adr].copy()
+        return q, ep, er, it
+
+    def seeds(
+        self, target: Pose, q_seed: ArrayLike, n: int, rng: np.random.Generator | None
+    ) -> list[NDArray[np.float64]]:
+        """Restart seeds: ``q_seed``; home turned about the base toward the target (the usual
+        branch: elbow up, hand in front); home; then home plus Gaussian noise of
+        ``seed_spread_rad`` from ``rng`` (none without ``rng``)."""
+        home = self.panda.home_arm_q
+        toward = home.copy()
+        toward[0] = np.clip(
+            np.arctan2(target.position[1], target.position[0]), self.lower[0], self.upper[0]
+        )
+        seeds = [np.asarray(q_seed, dtype=float), toward, home.copy()][:n]
+        while len(seeds) < n and rng is not None:
+            seeds.append(home + rng.normal(0.0, self.config.seed_spread_rad, size=7))
+        return seeds
+
+    def solve(
+        self,
+        target: Pose,
+        q_seed: ArrayLike,
+        rng: np.random.Generator | None = None,
+        restarts: int | None = None,
+        closest_to: ArrayLike | None = None,
+    ) -> IKSolution:
+        """Joint angles that put the TCP on ``target``, from the seeds of :meth:`seeds`.
+
+        Without ``closest_to`` the first acceptable solution is returned. With it, every restart
+        runs and the acceptable solution nearest to ``closest_to`` wins (largest joint change,
+        then summed squares: the shortest joint-space move), which avoids folded or turned-around
+        branches that a first hit may land in. With no acceptable solution, the one with the
+        smallest error is returned with ``ok=False``.
+        """
+        cfg = self.config
+        n = cfg.restarts if restarts is None else restarts
+        home = self.panda.home_arm_q
+        ref = None if closest_to is None else np.asarray(closest_to, dtype=float)
+        best: IKSolution | None = None
+        chosen: tuple[float, IKSolution] | None = None
+        iterations = blocked = tried = 0
+        for seed in self.seeds(target, q_seed, n, rng):
+            q, ep, er, it = self._descend(target, seed, home)
+            iterations += it
+            tried += 1
+            reason = ""
+            clear = float("inf")
+            if ep > cfg.position_tolerance_m or er > cfg.orientation_tolerance_deg:
+                reason = f"pose error {ep * 1000:.1f} mm / {er:.1f} deg after {it} iterations"
+            elif len(self.obstacle_geoms):
+                clear, geom = self.clearance(q)
+                if clear < cfg.clearance_m:
+                    body = self.model.body(self.model.geom_bodyid[geom]).name
+                    reason = f"{body} {clear * 1000:.1f} mm from the table or bin"
+                    blocked += int(self.model.geom_bodyid[geom] in self._rigid)
+            sol = IKSolution(q, not reason, ep, er, clear, tried, iterations, reason)
+            if sol.ok:
+                if ref is None:
+                    return sol
+                dq = np.abs(q - ref)
+                cost = float(dq.max() + 0.1 * np.sqrt(dq @ dq))
+                if chosen is None or cost < chosen[0]:
+                    chosen = (cost, sol)
+            elif best is None or (ep, er) < (best.position_error_m, best.orientation_error_deg):
+                best = sol
+            if chosen is None and blocked >= cfg.max_blocked_restarts:
+                # The pose is reached but the hand (or link7, rigid with it) is in the table or
+                # bin: the target fixes where they are, so other arm postures cannot help.
+                break
+        if chosen is not None:
+            chosen[1].restarts, chosen[1].iterations = tried, iterations
+            return chosen[1]
+        assert best is not None
+        best.restarts, best.iterations = tried, iterations
+        best.reason = f"unreachable after {tried} restart(s): {best.reason}"
+        return best
+
+    def solve_path(self, poses: Sequence[Pose], q_start: ArrayLike) -> PathSolution:
+        """Waypoints for ``poses`` (a line, say), each seeded from the previous solution without
+        random restarts so the arm stays on one branch; fails on an unreachable waypoint or a
+        joint jump above ``max_waypoint_jump_rad``."""
+        q_prev = np.asarray(q_start, dtype=float)
+        out, sols = [], []
+        for i, pose in enumerate(poses):
+            sol = self.solve(pose, q_prev, rng=None, restarts=1)
+            sols.append(sol)
+            if not sol.ok:
+                return PathSolution(np.array(out), False, f"waypoint {i}: {sol.reason}", sols)
+            jump = float(np.max(np.abs(sol.q - q_prev)))
+            if i > 0 and jump > self.config.max_waypoint_jump_rad:
+                return PathSolution(
+                    np.array(out),
+                    False,
+                    f"waypoint {i}: joint jump {jump:.2f} rad (a branch change)",
+                    sols,
+                )
+            out.append(sol.q)
+            q_prev = sol.q
+        return PathSolution(np.array(out), True, "", sols)
