@@ -18,10 +18,11 @@ it; the values live in ``configs/robot.yaml``. The changes, each with its reason
    damping becomes ``c`` (Menagerie: 1 N s/m), about critical for the servo. Limiting the speed
    with a large damping instead does not work in MuJoCo: damping is integrated implicitly,
    after the contact solver, and with 1400 N s/m the pads ring on the object by +-35 N.
-2. Finger pads. The five box pads on each fingertip get rubber-like friction, torsional
-   friction (``condim`` 4, so a grasped object resists spinning about the closing axis, as it
-   does on the real pads' contact patch) and a stiffer contact so 70 N does not sink the pads
-   into the object.
+2. Finger pads. The five box pads on each fingertip get rubber-like friction, torsional and
+   rolling friction (``condim`` 6: a grasped object resists spinning about the closing axis and
+   rocking about an axis in the pad plane, as it does on the real pads' pressed contact
+   patch, which a point contact cannot represent) and a stiffer contact so 70 N does not sink
+   the pads into the object.
 3. TCP site ``tcp``: the grasp centre between the fingertip pads (the closing point P_G of the
    paper). Its frame: x = closing axis (direction of finger motion, from the right finger
    toward the left finger), z = approach axis (from the palm toward the fingertips),
@@ -114,8 +115,8 @@ class RobotConfig:
     gripper: GripperConfig = field(default_factory=GripperConfig)
     pads: ContactConfig = field(
         default_factory=lambda: ContactConfig(
-            friction=(1.0, 0.0065, 0.0001),
-            condim=4,
+            friction=(1.0, 0.0065, 0.002),
+            condim=6,
             solref=(0.004, 1.0),
             solimp=(0.95, 0.99, 0.001, 0.5, 2.0),
         )
@@ -289,6 +290,11 @@ class Hand:
     def close_gripper(self, data: mujoco.MjData) -> None:
         """Close with the full grasp force (the command below zero width)."""
         data.ctrl[self.gripper_actuator_id] = self._close_command()
+
+    def squeeze_force(self, data: mujoco.MjData) -> float:
+        """Closing force the gripper actuator applies on each finger now, N (positive closes).
+        It reaches ``max_force_per_finger_n`` once a grasp has settled."""
+        return float(-0.5 * data.actuator_force[self.gripper_actuator_id])
 
     def finger_forces(self, data: mujoco.MjData, body_id: int | None = None) -> np.ndarray:
         """Normal contact force (N) on the (left, right) finger from ``body_id`` (any non-robot
