@@ -1,0 +1,1 @@
+"""Baseline planners behind the same :class:`~hsqbench.planner.api.Planner` interface."""
