@@ -27,7 +27,23 @@ def _hsq(config: Any = None) -> Planner:
     return HSQPlanner(config)
 
 
-_FACTORIES: dict[str, PlannerFactory] = {"hsq": _hsq}
+def _single_sq(config: Any = None) -> Planner:
+    from hsqbench.planner.baselines.single_sq import SingleSQPlanner
+
+    return SingleSQPlanner(config)
+
+
+def _antipodal(config: Any = None) -> Planner:
+    from hsqbench.planner.baselines.antipodal import AntipodalPlanner
+
+    return AntipodalPlanner(config)
+
+
+_FACTORIES: dict[str, PlannerFactory] = {
+    "hsq": _hsq,
+    "single-sq": _single_sq,
+    "antipodal": _antipodal,
+}
 
 
 def register_planner(name: str, factory: PlannerFactory, *, replace: bool = False) -> None:
