@@ -249,3 +249,38 @@ def test_config_changes_reach_the_scene() -> None:
     )
     model, _, info = build_scene("isolated", ["proc_box"], seed=0, scene_config=wider)
     np.testing.assert_allclose(model.geom_size[info.table_geom_id][:2], [0.7, 0.9])
+
+
+def test_physics_options_reach_the_model() -> None:
+    from hsqbench.sim.physics import load_physics_config
+
+    physics = load_physics_config()
+    model, _, info = build_scene("isolated", ["proc_box"], seed=0)
+    assert model.opt.timestep == physics.timestep_s
+    assert model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert model.opt.impratio == physics.impratio
+    assert model.opt.noslip_iterations == physics.noslip_iterations
+    hulls = info.object_geom_ids["proc_box"]
+    np.testing.assert_allclose(
+        model.geom_friction[hulls], np.tile(physics.objects.friction, (len(hulls), 1))
+    )
+    assert set(model.geom_condim[hulls]) == {physics.objects.condim}
+
+
+def test_object_inertia_is_the_assets() -> None:
+    """Explicit inertial: mass, centre of mass and the full tensor (via principal axes)."""
+    from hsqbench.assets.library import get_object
+    from hsqbench.sim.objects import principal_inertia
+
+    asset = get_object("proc_l")  # an L: off-centre COM and a non-diagonal tensor
+    model, _, info = build_scene("isolated", ["proc_l"], seed=0)
+    body = info.object_body_ids["proc_l"]
+    assert model.body_mass[body] == pytest.approx(asset.mass_kg)
+    np.testing.assert_allclose(model.body_ipos[body], asset.com, atol=1e-9)
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, model.body_iquat[body])
+    rot = rot.reshape(3, 3)
+    tensor = rot @ np.diag(model.body_inertia[body]) @ rot.T
+    np.testing.assert_allclose(tensor, asset.inertia, rtol=1e-6, atol=1e-12)
+    with pytest.raises(ValueError, match="positive definite"):
+        principal_inertia(np.diag([1.0, 1.0, -1.0]))
