@@ -15,7 +15,7 @@ class ViewerConfig:
     Attributes:
         step_interval_s: simulated seconds between two logged body poses.
         geom_groups: MuJoCo geom groups drawn as the scene and the bodies' looks.
-        collision_geoms: also log the collision geoms (group 3) under ``.../collision``.
+        collision_geoms: also log the collision geoms (group 3) under ``.../collision_geoms``.
         max_faces_per_geom: mesh geoms are decimated to at most this many triangles.
         depth_unit_m: depth images are stored as uint16 multiples of this, metres.
         cloud_radius_m, inlier_radius_m: point radii of the cloud and of the superquadrics'

@@ -4,33 +4,28 @@
 world frame (the robot base frame: z up, metres) on one timeline, ``sim_time`` (simulated
 seconds, ``MjData.time``). Entity paths:
 
-====================================  =======================================================
-``world``                             view coordinates: right-handed, z up (static)
-``world/scene``                       table, legs and bin: one mesh (static)
-``world/workspace``                   the placement / crop box, wireframe (static)
-``world/robot/<body>``                each Panda link: mesh in the body frame (static), pose
-                                      (``Transform3D``) every ``step_interval_s``
-``world/objects/<name>``              each object: the same
-``world/<...>/collision``             collision geoms, if ``collision_geoms`` (hidden in the
-                                      default view)
-``world/cameras/<cam>``               camera pose and ``Pinhole`` (optical frame RDF), per
-                                      observation; ``<cam>`` is the MuJoCo name without ``cam_``
-``world/cameras/<cam>/depth``         the measured depth image (metres, 0 = invalid)
-``world/cloud``                       the fused, cropped cloud, coloured by camera
-``world/planner/superquadrics/<i>``   hidden superquadric ``i`` as a mesh coloured by the score
-                                      of its best grasp (grey: none), its parameters as values
-``world/planner/superquadrics/<i>/inliers``  the points it explains
-``world/planner/candidates/<class>``  candidates as arrows along the approach axis ending at
-                                      P_G: ``kept`` coloured by score, else by the rule that
-                                      removed them (``width``, ``support``, ``table``,
-                                      ``collision``, ``sweep``)
-``world/planner/top_grasps``          outlines of the best ``top_grasps`` grasps
-``world/planner/chosen_grasp``        outline of the executed grasp
-``plots/gripper_width``               finger opening over time, metres
-``events``                            text log: perception, planning, phases, outcomes
-``outcome``                           the attempt's outcome as a text document
-``scene``                             what was simulated (static text)
-====================================  =======================================================
+- ``world``: view coordinates, right-handed, z up (static).
+- ``world/scene``: table, legs and bin as one mesh (static).
+- ``world/workspace``: the placement / crop box, wireframe (static).
+- ``world/robot/<body>``: each Panda link's mesh in the body frame (static) and its pose
+  (``Transform3D``) every ``step_interval_s``; ``world/objects/<name>``: each object, the same.
+- ``world/<...>/collision_geoms``: collision geoms, if ``collision_geoms`` (left out of the
+  default 3-D view).
+- ``world/cameras/<cam>``: camera pose and ``Pinhole`` (optical frame RDF) at each observation;
+  ``<cam>`` is the MuJoCo camera name without ``cam_``. ``world/cameras/<cam>/depth``: the
+  measured depth image (0 = invalid).
+- ``world/cloud``: the fused, cropped cloud, coloured by camera.
+- ``world/planner/superquadrics/<i>``: hidden superquadric ``i`` as a mesh coloured by the score
+  of its best grasp (grey: none), with its parameters as values; ``.../<i>/inliers``: the
+  points it explains, in the same colour.
+- ``world/planner/candidates/<class>``: candidates as arrows along the approach axis ending at
+  P_G; ``kept`` coloured by score, the others by the rule that removed them (``width``,
+  ``support``, ``table``, ``collision``, ``sweep``).
+- ``world/planner/top_grasps``: outlines of the best ``top_grasps`` grasps;
+  ``world/planner/chosen_grasp``: the outline of the executed one (white).
+- ``plots/gripper_width``: finger opening over time, metres.
+- ``events``: text log of perception, planning, phases and outcomes; ``outcome``: the attempt's
+  outcome as a text document; ``scene``: what was simulated (static).
 
 When each is logged: the scene and the initial poses in ``on_scene``; cameras, depth and cloud in
 ``on_observation``; superquadrics, candidates and top grasps in ``on_plan``; the chosen grasp in
@@ -173,7 +168,9 @@ class RerunRecorder:
         return rrb.Blueprint(
             rrb.Horizontal(
                 rrb.Spatial3DView(
-                    origin="world", name="scene", contents=["+ world/**", "- world/**/collision"]
+                    origin="world",
+                    name="scene",
+                    contents=["+ world/**", "- world/**/collision_geoms"],
                 ),
                 rrb.Vertical(
                     *depth_views,
@@ -226,7 +223,7 @@ class RerunRecorder:
             if body in meshes:
                 self.rec.log(path, self._mesh(meshes[body]), static=True)
             if body in hulls:
-                self.rec.log(f"{path}/collision", self._mesh(hulls[body]), static=True)
+                self.rec.log(f"{path}/collision_geoms", self._mesh(hulls[body]), static=True)
             if body == 0:
                 continue
             if int(model.body_weldid[body]) == 0:  # welded to the world: one static pose

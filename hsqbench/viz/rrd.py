@@ -69,7 +69,7 @@ def read_recording(path: str | Path, text_key: str = "sim_time") -> RecordingSum
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(
-            f"no such recording: {p} (record one with `hsqbench trial --rerun {p}`)"
+            f"no such recording: {p} (record one with `hsqbench trial --object NAME --rerun {p}`)"
         )
     if p.is_dir():
         raise ValueError(f"{p} is a directory; give the path of one .rrd file")
