@@ -52,6 +52,9 @@ _CURVE_FINE = 1024
 #: grids otherwise give arbitrarily close pairs, and a face grid whose warp does not fit an off-centre
 #: part (e.g. the side facets of a square bipyramid) packs rows down to about 0.6 spacing.
 _SEAM_MIN_FRACTION = 0.7
+#: Close samples are thinned only if their normals differ by less than 120 degrees (cosine above
+#: this): a cube edge (90 degrees) still counts, the two sides of a thin plate (180) do not.
+_SAME_SIDE_MIN_COS = -0.5
 #: Face grids extend past their region while the normal component of their axis is at least this
 #: share of the largest one (slope <= 2); those extra nodes are only used to fill holes at seams.
 _SEAM_BAND_SHARE = 0.5
@@ -108,12 +111,18 @@ def _quarter_curve(eps: float, a: float, b: float) -> tuple[NDArray, NDArray, ND
 
 
 def _greedy_thinning(
-    points: NDArray, priority: NDArray, spare: NDArray[np.bool_], min_dist: float, spare_dist: float
+    points: NDArray,
+    normals: NDArray,
+    priority: NDArray,
+    spare: NDArray[np.bool_],
+    min_dist: float,
+    spare_dist: float,
 ) -> NDArray[np.bool_]:
     """Mask of a subset of ``points`` where no two kept points conflict, preferring high priority.
 
     Two points conflict when closer than ``min_dist``, or ``spare_dist`` if either is flagged
-    ``spare``. The result is the greedy independent set in decreasing priority, computed in
+    ``spare``, unless their unit ``normals`` differ by more than 120 degrees: those lie on the two
+    sides of a part thinner than the spacing and both must stay. The result is the greedy independent set in decreasing priority, computed in
     parallel rounds: a point beating all its remaining conflicting neighbours is kept and those
     neighbours are dropped. Loops over rounds (a handful), never over points.
     """
@@ -122,8 +131,10 @@ def _greedy_thinning(
     pairs = cKDTree(points).query_pairs(max(min_dist, spare_dist), output_type="ndarray")
     if pairs.size == 0:
         return keep
-    dist = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
-    pairs = pairs[dist < np.where(spare[pairs[:, 0]] | spare[pairs[:, 1]], spare_dist, min_dist)]
+    i, j = pairs[:, 0], pairs[:, 1]
+    dist = np.linalg.norm(points[i] - points[j], axis=1)
+    same_side = np.einsum("ij,ij->i", normals[i], normals[j]) > _SAME_SIDE_MIN_COS
+    pairs = pairs[same_side & (dist < np.where(spare[i] | spare[j], spare_dist, min_dist))]
     rank = np.empty(n, dtype=np.int64)
     rank[np.lexsort((np.arange(n), priority))] = np.arange(n)
     while pairs.size:
@@ -396,10 +407,14 @@ class Superquadric:
         the seams are filled with nodes of the neighbouring face grid that extend past the seam.
         Points satisfy ``G = 1`` to rounding (each is finally projected radially onto the surface).
 
+        Close samples whose normals differ by more than 120 degrees are both kept: they lie on the
+        two sides of a part thinner than the spacing (a plate, a sharp wedge), which are far apart
+        on the surface, so near such a ridge the 3-D distance between samples drops below spacing.
+
         Measured over 300 random shapes (eps in [0.05, 2], semi-axes 1-8 cm, spacing 2-5 mm): the
-        mean nearest-neighbour distance is 0.83-1.03 ``spacing`` with a coefficient of variation of
-        at most 0.14, and no surface point is farther than 1.03 ``spacing`` from a sample (0.9 for
-        spheres, boxes, cylinders and octahedra).
+        mean nearest-neighbour distance (same-side neighbours) is 0.83-1.03 ``spacing`` with a
+        coefficient of variation of at most 0.14, and no surface point is farther than 1.03
+        ``spacing`` from a sample (0.9 for spheres, boxes, cylinders and octahedra).
 
         Args:
             spacing: target distance between neighbouring samples, metres (> 0).
@@ -424,12 +439,12 @@ class Superquadric:
             )
         faces = [self._face_candidates(axis, *nodes[axis]) for axis in range(3)]
         local, grad, spare, priority = (np.concatenate(parts) for parts in zip(*faces, strict=True))
-        keep = _greedy_thinning(
-            local, priority, spare, _SEAM_MIN_FRACTION * spacing, _HOLE_FRACTION * spacing
-        )
-        local, grad = local[keep], grad[keep]
-        local /= np.sqrt(self.inside_outside_pow(local, local=True))[:, None]
         normals = grad / np.linalg.norm(grad, axis=1, keepdims=True)
+        keep = _greedy_thinning(
+            local, normals, priority, spare, _SEAM_MIN_FRACTION * spacing, _HOLE_FRACTION * spacing
+        )
+        local, normals = local[keep], normals[keep]
+        local /= np.sqrt(self.inside_outside_pow(local, local=True))[:, None]
         return self.to_world(local), normals @ self.rotation.T
 
     # ----------------------------------------------------------------- mesh

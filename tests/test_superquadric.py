@@ -53,6 +53,18 @@ def nn_distances(points: np.ndarray) -> np.ndarray:
     return cKDTree(points).query(points, k=2)[0][:, 1]
 
 
+def nn_same_side(points: np.ndarray, normals: np.ndarray, k: int = 8) -> np.ndarray:
+    """Nearest-neighbour distance among samples whose normals differ by less than 120 degrees.
+
+    Across a sharp thin wedge the two sides come arbitrarily close in 3-D although they are far
+    apart on the surface; the sampler keeps both sides, so evenness is judged side by side.
+    """
+    dist, idx = cKDTree(points).query(points, k=k)
+    same = np.einsum("ij,ikj->ik", normals, normals[idx]) > -0.5
+    same[:, 0] = False
+    return dist[np.arange(points.shape[0]), np.argmax(same, axis=1)]
+
+
 # ------------------------------------------------------------------------------------ sampling
 @pytest.mark.parametrize("name", sorted(SHAPES))
 def test_samples_lie_on_surface(name: str) -> None:
@@ -101,12 +113,23 @@ def test_sampling_even_on_random_shapes() -> None:
         e1, e2 = rng.choice([0.05, 2.0, *rng.uniform(0.05, 2.0, 4)], size=2)
         sq = Superquadric(e1, e2, rng.uniform(0.01, 0.05, 3), *random_pose(rng))
         spacing = rng.uniform(0.003, 0.005)
-        points, _ = sq.sample_surface(spacing)
-        d = nn_distances(points)
+        points, normals = sq.sample_surface(spacing)
+        d = nn_same_side(points, normals)
         assert d.std() / d.mean() < 0.3, (e1, e2, sq.scale)
         assert 0.7 * spacing < d.mean() < 1.3 * spacing, (e1, e2, sq.scale)
         fine, _ = sq.sample_surface(spacing / 4)
         assert cKDTree(points).query(fine)[0].max() < 1.1 * spacing, (e1, e2, sq.scale)
+
+
+@pytest.mark.parametrize("thickness", [2e-4, 1e-3])
+def test_thin_plate_keeps_both_sides(thickness: float) -> None:
+    sq = Superquadric(0.3, 1.0, (0.04, 0.04, 0.5 * thickness))
+    spacing = 0.003
+    points, normals = sq.sample_surface(spacing)
+    top, bottom = np.count_nonzero(normals[:, 2] > 0.9), np.count_nonzero(normals[:, 2] < -0.9)
+    assert top == bottom > 0.9 * np.pi * 0.04**2 / spacing**2
+    d = nn_same_side(points, normals)
+    assert d.std() / d.mean() < 0.3
 
 
 def test_sample_count_scales_with_area() -> None:
@@ -441,7 +464,7 @@ def _sq(e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple) -> Superq
     return Superquadric(e1, e2, scale, Rotation.from_quat(quat).as_matrix(), trans)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True)
 @given(eps_st, eps_st, scale_st, quat_st, trans_st)
 def test_vector_round_trip(e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple) -> None:
     sq = _sq(e1, e2, scale, quat, trans)
@@ -455,7 +478,7 @@ def test_vector_round_trip(e1: float, e2: float, scale: tuple, quat: tuple, tran
     np.testing.assert_array_equal(back.translation, sq.translation)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True)
 @given(eps_st, eps_st, scale_st, quat_st, trans_st, points_st)
 def test_frame_round_trip(
     e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple, points: list
@@ -466,7 +489,7 @@ def test_frame_round_trip(
     np.testing.assert_allclose(sq.to_local(sq.to_world(p)), p, atol=1e-12)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True)
 @given(eps_st, eps_st, scale_st, quat_st, trans_st, quat_st, trans_st, points_st)
 def test_inside_outside_invariant_under_pose_change(
     e1: float,
@@ -484,13 +507,18 @@ def test_inside_outside_invariant_under_pose_change(
     moved = Superquadric(e1, e2, scale, move @ sq.rotation, move @ sq.translation + shift)
     p = np.array(points)
     q = p @ move.T + shift
-    np.testing.assert_allclose(moved.inside_outside_pow(q), sq.inside_outside_pow(p), rtol=1e-9)
+    # G is homogeneous of degree 2: rounding of the pose gives ~1e-32 at the centre itself
     np.testing.assert_allclose(
-        moved.radial_distance(q), sq.radial_distance(p), rtol=1e-7, atol=1e-12
+        moved.inside_outside_pow(q), sq.inside_outside_pow(p), rtol=1e-9, atol=1e-20
+    )
+    # the ray direction is undefined at the centre: compare away from it
+    away = np.linalg.norm(p - sq.translation, axis=1) > 1e-9
+    np.testing.assert_allclose(
+        moved.radial_distance(q[away]), sq.radial_distance(p[away]), rtol=1e-7, atol=1e-12
     )
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True)
 @given(eps_st, eps_st, scale_st, quat_st, trans_st, points_st)
 def test_radial_distance_non_negative_and_finite(
     e1: float, e2: float, scale: tuple, quat: tuple, trans: tuple, points: list
