@@ -5,13 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hsqbench.planner.baselines.antipodal import cast_rays, closing_lines, sample_antipodal_pairs
+from hsqbench.planner.baselines.antipodal import (
+    cast_rays,
+    closing_lines,
+    pair_dots,
+    sample_antipodal_pairs,
+)
 from hsqbench.planner.baselines.config import AntipodalConfig
 from hsqbench.planner.baselines.normals import (
     estimate_normals,
     neighbourhood_centroids,
     orient_outward,
-    pair_dots,
 )
 from tests.shapes import Box, Cylinder, union_cloud
 
@@ -73,6 +77,11 @@ def test_neighbourhood_centroid_of_a_lone_point_is_its_voxel() -> None:
     centres = neighbourhood_centroids(points, 0.05, 0.01)
     np.testing.assert_allclose(centres[2], points[2])
     np.testing.assert_allclose(centres[0], [0.0005, 0.0, 0.0])
+
+
+def test_orientation_voxel_must_fit_the_radius() -> None:
+    with pytest.raises(ValueError, match="radius / sqrt"):
+        neighbourhood_centroids(np.zeros((5, 3)), 0.01, 0.01)
 
 
 @pytest.mark.parametrize(("k", "n", "needle"), [(2, 100, "k >= 3"), (20, 10, "at least 20")])

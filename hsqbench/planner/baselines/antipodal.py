@@ -53,7 +53,7 @@ from hsqbench.planner.baselines.config import (
     BaselinesConfig,
     resolve_baselines_config,
 )
-from hsqbench.planner.baselines.normals import estimate_normals, orient_outward, pair_dots
+from hsqbench.planner.baselines.normals import estimate_normals, orient_outward
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
@@ -92,6 +92,12 @@ class AntipodalPairs:
 
     def __len__(self) -> int:
         return int(self.p.shape[0])
+
+
+def pair_dots(a: Array, b: Array) -> Array:
+    """(n, m) dot products of the rows of ``a`` (n, 3) and ``b`` (m, 3), as broadcast sums:
+    ``a @ b.T`` is too skinny for BLAS, whose threads only add overhead on a busy machine."""
+    return a[:, 0, None] * b[:, 0] + a[:, 1, None] * b[:, 1] + a[:, 2, None] * b[:, 2]
 
 
 def cast_rays(points: Array, origins: Array, directions: Array, radius: float, t_min: float):

@@ -54,6 +54,12 @@ class AntipodalConfig:
         for key, value in positive.items():
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"antipodal.{key} must be > 0, got {value}")
+        if self.orientation_voxel_m * np.sqrt(3.0) > self.orientation_radius_m:
+            raise ValueError(
+                "antipodal.orientation_voxel_m must be at most orientation_radius_m / sqrt(3) "
+                f"(each point must reach its own voxel), got {self.orientation_voxel_m} for a "
+                f"radius of {self.orientation_radius_m}"
+            )
         if self.normal_neighbours < 3:
             raise ValueError(
                 f"antipodal.normal_neighbours must be >= 3 (a plane), got {self.normal_neighbours}"

@@ -9,8 +9,8 @@
   pointed away from the centroid of the cloud within ``radius`` of its point: on a convex surface
   every other point lies behind the tangent plane, so that centroid lies inside the object.
   The rule fails in concavities (the inside of a bowl) and where a neighbouring object dominates
-  the neighbourhood (packed scenes); the neighbourhood centroid is computed on a coarse voxel
-  grid so the cost is ``O(points x coarse voxels)``.
+  the neighbourhood (packed scenes). The neighbourhood centroid is computed on a coarse voxel
+  grid: its cost follows the number of coarse voxels within the radius of each point.
 """
 
 from __future__ import annotations
@@ -24,15 +24,6 @@ from scipy.spatial import cKDTree
 from hsqbench.planner.downsample import voxel_downsample
 
 Array = NDArray[np.float64]
-
-#: Points per block when comparing every point with every coarse voxel (memory bound).
-_CHUNK_PAIRS = 2_000_000
-
-
-def pair_dots(a: Array, b: Array) -> Array:
-    """(n, m) dot products of the rows of ``a`` (n, 3) and ``b`` (m, 3), as broadcast sums:
-    ``a @ b.T`` is too skinny for BLAS, whose threads only add overhead on a busy machine."""
-    return a[:, 0, None] * b[:, 0] + a[:, 1, None] * b[:, 1] + a[:, 2, None] * b[:, 2]
 
 
 @dataclass(frozen=True)
@@ -74,27 +65,29 @@ def estimate_normals(points: Array, k: int) -> Normals:
 def neighbourhood_centroids(points: Array, radius_m: float, voxel_m: float) -> Array:
     """(N, 3) centroid of the cloud within ``radius_m`` of each point, from ``voxel_m`` voxels.
 
-    Each voxel's centroid stands for its points (weighted by their count); a point's own voxel
-    is always within reach, so every row is defined.
+    Each voxel's centroid stands for its points (weighted by their count). A point and its own
+    voxel's centroid share a cube of side ``voxel_m``, so with ``voxel_m * sqrt(3) <= radius_m``
+    every point has at least that neighbour.
+
+    Raises:
+        ValueError: ``voxel_m * sqrt(3) > radius_m``.
     """
+    if voxel_m * np.sqrt(3.0) > radius_m:
+        raise ValueError(
+            f"the orientation voxel ({voxel_m:g} m) must be at most radius / sqrt(3) "
+            f"({radius_m / np.sqrt(3.0):.4g} m) so that each point reaches its own voxel"
+        )
     coarse = voxel_downsample(points, voxel_m)
     centres, weights = coarse.points, coarse.counts
-    out = np.empty_like(points)
-    r2 = radius_m * radius_m
-    c2 = np.einsum("ij,ij->i", centres, centres)
-    block = max(1, _CHUNK_PAIRS // max(len(centres), 1))
-    for start in range(0, points.shape[0], block):
-        p = points[start : start + block]
-        d2 = np.einsum("ij,ij->i", p, p)[:, None] - 2.0 * pair_dots(p, centres) + c2[None, :]
-        w = np.where(d2 <= r2, weights[None, :], 0.0)
-        # The point's own voxel may lie just outside the radius (voxel >> radius is a misuse).
-        w[np.arange(len(p)), coarse.inverse[start : start + block]] = weights[
-            coarse.inverse[start : start + block]
-        ]
-        # einsum's own loop, not BLAS (see pair_dots).
-        total = np.einsum("ij,jk->ik", w, centres)
-        out[start : start + block] = total / w.sum(axis=1, keepdims=True)
-    return out
+    pairs = cKDTree(points).sparse_distance_matrix(
+        cKDTree(centres), radius_m, output_type="ndarray"
+    )
+    i, w = pairs["i"], weights[pairs["j"]]
+    n = points.shape[0]
+    total = np.column_stack(
+        [np.bincount(i, weights=w * centres[pairs["j"], k], minlength=n) for k in range(3)]
+    )
+    return total / np.bincount(i, weights=w, minlength=n)[:, None]
 
 
 def orient_outward(points: Array, normals: Array, radius_m: float, voxel_m: float) -> Array:
