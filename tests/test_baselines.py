@@ -106,6 +106,13 @@ def test_bad_settings_are_refused_by_name(override, needle) -> None:
         from_dict(BaselinesConfig, {"antipodal": override})
 
 
+def test_a_planner_config_object_is_refused_with_a_hint() -> None:
+    from hsqbench.planner.config import PlannerConfig
+
+    with pytest.raises(TypeError, match="'planner' entry"):
+        get_planner("antipodal", PlannerConfig())
+
+
 def test_a_config_path_is_accepted(tmp_path) -> None:
     path = tmp_path / "mine.yaml"
     path.write_text("antipodal:\n  n_samples: 50\n")

@@ -106,6 +106,11 @@ def resolve_baselines_config(config: BaselinesConfig | str | Path | None) -> Bas
     """
     if isinstance(config, BaselinesConfig):
         return config
+    if config is not None and not isinstance(config, (str, Path)):
+        raise TypeError(
+            f"baseline planners take a BaselinesConfig, a config name or a YAML path, got "
+            f"{type(config).__name__}; stage settings go in its 'planner' entry"
+        )
     path = resolve_config_path("baselines" if config is None else config)
     return _load(str(path), path.stat().st_mtime_ns)
 
