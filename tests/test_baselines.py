@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -228,6 +229,16 @@ def test_antipodal_is_deterministic_per_seed() -> None:
     assert [g.to_dict() for g in a.grasps[:20]] == [g.to_dict() for g in b.grasps[:20]]
     # Another seed samples other points.
     assert not np.array_equal(a.candidates.lines.centres, c.candidates.lines.centres)
+
+
+@pytest.mark.parametrize("name", ["single-sq", "antipodal"])
+def test_results_serialise_to_json(name) -> None:
+    points = seen([yawed_box(45.0)], seed=4)
+    result = get_planner(name).plan(points, PlanningContext(support_plane=TABLE))
+    out = json.loads(json.dumps(result.to_dict(top=3)))
+    assert out["planner"] == name and out["n_grasps"] == len(result.grasps) > 0
+    assert len(out["grasps"]) == 3 and out["grasps"][0]["family"]
+    assert len(out["hidden_superquadrics"]) == (1 if name == "single-sq" else 0)
 
 
 def test_single_sq_is_deterministic() -> None:
