@@ -170,6 +170,7 @@ def test_result_is_reproducible_and_serialisable() -> None:
     assert len(out["grasps"]) == min(3, len(a.grasps)) and out["n_grasps"] == len(a.grasps)
     assert list(out["remaining"]) == [
         "synthesised",
+        "duplicate",
         "width",
         "support",
         "table",

@@ -11,6 +11,7 @@ from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.elimination import (
     approach_openings,
     body_hits,
+    duplicate_lines,
     eliminate,
     line_boxes,
     support_kappa,
@@ -232,9 +233,28 @@ def test_counts_follow_the_rule_order() -> None:
     report = eliminate(both, np.concatenate([two_faces(0.02), obstacle]), GRIPPER, CONFIG)
     n = len(ROLLS)
     assert report.remaining["synthesised"] == 2 * n
+    assert report.remaining["duplicate"] == 2 * n
     assert report.remaining["width"] == n
     assert report.remaining["support"] == n
     counts = both.counts_by_reason()
     assert counts["width"] == n
     assert counts["collision"] == n - report.remaining["collision"]
     assert counts["kept"] == report.remaining["sweep"]
+
+
+def test_duplicate_lines_keep_the_best_fitting_copy() -> None:
+    base = one_line(0.02).lines
+    near = one_line(0.021, centre=(0.001, -0.001, 0.0), direction=(-1.0, 0.02, 0.0)).lines
+    other = one_line(0.02, centre=(0.0, 0.01, 0.0)).lines  # 1 cm away: a different line
+    turned = one_line(0.02, direction=(np.cos(0.1), np.sin(0.1), 0.0)).lines  # 5.7 deg off
+    lines = ClosingLines.concatenate([base, near, other, turned])
+    dup = duplicate_lines(lines, np.array([0.5, 0.9, 0.5, 0.5]), CONFIG)
+    np.testing.assert_array_equal(dup, [True, False, False, False])
+    # Equal priority: the first copy stays.
+    dup = duplicate_lines(lines, np.zeros(4), CONFIG)
+    np.testing.assert_array_equal(dup, [False, True, False, False])
+    # In elimination the copy is marked and the rules see one line.
+    cands = CandidateSet(lines, ROLLS)
+    eliminate(cands, two_faces(0.02), GRIPPER, CONFIG, line_priority=np.array([0.5, 0.9, 0.5, 0.5]))
+    per_line = cands.rejected_by.reshape(4, -1)
+    assert set(per_line[0]) == {"duplicate"} and "duplicate" not in set(per_line[1])

@@ -30,7 +30,7 @@ from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_con
 from hsqbench.planner.elimination import RULE_DESCRIPTIONS, eliminate
 from hsqbench.planner.grasp import Grasp
 from hsqbench.planner.gripper import GripperModel, load_gripper
-from hsqbench.planner.scoring import score_candidates
+from hsqbench.planner.scoring import fit_factors, score_candidates
 from hsqbench.planner.synthesis import synthesize
 from hsqbench.superquadric import Superquadric, as_points
 
@@ -244,12 +244,14 @@ def plan_from_hidden(
     timings["synthesis"] = time.perf_counter() - start
 
     start = time.perf_counter()
-    report = eliminate(cands, cloud, grip, cfg, plane, 0 if seed is None else seed)
+    alphas = np.array([h.alpha for h in hidden], dtype=np.float64)
+    betas = np.array([h.beta for h in hidden], dtype=np.float64)
+    h_alpha, h_beta = fit_factors(alphas, betas, cfg)
+    priority = (h_alpha * h_beta)[cands.lines.source]
+    report = eliminate(cands, cloud, grip, cfg, plane, 0 if seed is None else seed, priority)
     timings["elimination"] = time.perf_counter() - start
 
     start = time.perf_counter()
-    alphas = np.array([h.alpha for h in hidden], dtype=np.float64)
-    betas = np.array([h.beta for h in hidden], dtype=np.float64)
     score_candidates(cands, superquadrics, alphas, betas, cloud.mean(axis=0), packed, cfg)
     grasps = cands.ranked()
     timings["scoring"] = time.perf_counter() - start

@@ -70,6 +70,8 @@ class GraspConfig:
     round_axis_ratio_tol: float = 0.1
     max_tilt_deg: float = 15.0
     # Elimination.
+    duplicate_distance_m: float = 0.003
+    duplicate_angle_deg: float = 3.0
     elimination_voxel_m: float = 0.003
     opening_margin_m: float = 0.004
     support_radius_m: float = 0.01
@@ -92,6 +94,8 @@ class GraspConfig:
             "slide_step_m": self.slide_step_m,
             "rotate_step_deg": self.rotate_step_deg,
             "elimination_voxel_m": self.elimination_voxel_m,
+            "duplicate_distance_m": self.duplicate_distance_m,
+            "duplicate_angle_deg": self.duplicate_angle_deg,
             "support_radius_m": self.support_radius_m,
             "contact_depth_m": self.contact_depth_m,
             "q_alpha": self.q_alpha,

@@ -5,6 +5,11 @@ occupied voxel): the cost then follows the object's surface area, not the sensor
 the centroids average out part of the noise. Rules, in order; a candidate carries the first rule
 that removed it (``CandidateSet.rejected_by``):
 
+0. ``duplicate`` (addition): several seeds of stage one often converge to the same part, so the
+   same closing line comes from several hidden superquadrics. A line within
+   ``duplicate_distance_m`` (centre and half length) and ``duplicate_angle_deg`` (direction) of a
+   line from a better-fitting superquadric (higher ``h_alpha h_beta``) goes: the ranking then
+   holds each pose once, and the rules below run on fewer lines.
 1. ``width``: the contacts are farther apart than the opening allows,
    ``2 h > l_w - opening_margin_m``.
 2. ``support`` (paper): a cylinder of radius ``support_radius_m`` around each contact, reaching
@@ -47,13 +52,20 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from hsqbench.planner.candidates import KEPT, REJECTION_REASONS, CandidateSet, roll_frames
+from hsqbench.planner.candidates import (
+    KEPT,
+    REJECTION_REASONS,
+    CandidateSet,
+    ClosingLines,
+    roll_frames,
+)
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.gripper import GripperModel
 
 #: One line per rule, for messages and the viewer's legend.
 RULE_DESCRIPTIONS = {
+    "duplicate": "the same closing line from a better-fitting hidden superquadric",
     "width": "contacts farther apart than the gripper opens",
     "support": "too few cloud points at a contact, or no surface there facing the finger",
     "table": "fingers or palm would enter the support plane",
@@ -61,12 +73,15 @@ RULE_DESCRIPTIONS = {
     "sweep": "a cloud point in the open fingers or in the palm's approach path",
 }
 
-#: Line-by-point pairs processed at once (memory bound: a few arrays of this many float64).
-_CHUNK_PAIRS = 1_000_000
+#: Line-by-point pairs processed at once: a dozen float32 arrays of this size stay in cache.
+_CHUNK_PAIRS = 100_000
 #: Query points used to estimate the cloud's spacing (a seeded subset is as good as all).
 _SPACING_SAMPLES = 2000
-#: Angular slack, radians, when deciding whether a discrete roll lies in an arc (favours collision).
-_ARC_SLACK = 1e-9
+#: Slack, in roll steps, when deciding whether a discrete roll lies in an arc (favours collision;
+#: covers the float32 rounding of the angles, about 1e-7 rad).
+_ARC_SLACK = 1e-5
+#: An interval of |psi| that ends within this of 0 or pi (radians, float32 rounding) reaches it.
+_ANGLE_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -108,15 +123,18 @@ def _line_coordinates(
 ) -> tuple[NDArray, NDArray, NDArray]:
     """Points in each line's frame: ``s`` along ``d``, ``u`` along ``e1``, ``v`` along ``e2``; (M, L).
 
-    Written as broadcast sums, not ``points @ axes.T``: a (M, 3) x (3, L) product is too skinny
-    for BLAS, whose threads only add overhead on a busy machine.
+    float32, relative to each line's centre (so a few micrometres at most are lost, far below
+    the cloud's noise) and half the memory traffic of float64. Written as broadcast sums, not
+    ``points @ axes.T``: a (M, 3) x (3, L) product is too skinny for BLAS, whose threads only
+    add overhead on a busy machine.
     """
     e2 = np.cross(directions, approach0)
-    rel = [points[:, k, None] for k in range(3)]
+    rel = [points[:, k, None].astype(np.float32) for k in range(3)]
 
     def project(axes: NDArray) -> NDArray:
-        offset = np.einsum("ij,ij->i", centres, axes)
-        return rel[0] * axes[:, 0] + rel[1] * axes[:, 1] + rel[2] * axes[:, 2] - offset
+        offset = np.einsum("ij,ij->i", centres, axes).astype(np.float32)
+        a = axes.astype(np.float32)
+        return rel[0] * a[:, 0] + rel[1] * a[:, 1] + rel[2] * a[:, 2] - offset
 
     return project(directions), project(approach0), project(e2)
 
@@ -155,12 +173,13 @@ def support_stats(
         idx = lines[sl]
         m = idx.size
         s, u, v = _line_coordinates(points, L.centres[idx], L.directions[idx], L.approach0[idx])
-        h = L.half_lengths[idx]
-        radial = u * u + v * v <= r2
+        h = L.half_lengths[idx].astype(np.float32)
+        near = (u * u + v * v <= r2) & (np.abs(np.abs(s) - h) <= depth)
         for side, sign in enumerate((1.0, -1.0)):
-            t = sign * s
-            pt, ln = np.nonzero(radial & (t > 0.0) & (np.abs(t - h) <= depth))
-            coords = np.stack([t[pt, ln], u[pt, ln], v[pt, ln]], axis=1)
+            flat = np.flatnonzero(near & (sign * s > 0.0))
+            ln = flat % m
+            coords = np.stack([sign * s.flat[flat], u.flat[flat], v.flat[flat]], axis=1)
+            coords = coords.astype(np.float64)
             count = np.bincount(ln, minlength=m)
             counts[sl, side] = count
             # Covariance of each cylinder's points, (m, 3, 3), from per-line sums.
@@ -176,6 +195,33 @@ def support_stats(
             _, vectors = np.linalg.eigh(cov)
             cos_tilt[sl, side] = np.where(count >= 3, np.abs(vectors[:, 0, 0]), 0.0)
     return SupportStats(counts, cos_tilt)
+
+
+def duplicate_lines(
+    lines: ClosingLines, priority: NDArray, config: GraspConfig
+) -> NDArray[np.bool_]:
+    """(L,): lines within tolerance of a line of higher ``priority`` (ties: lower index wins).
+
+    Lines are compared as points ``(centre / tol_m, d / tol_rad, h / tol_m)`` with the sign of
+    ``d`` fixed (a line has no direction); pairs within distance 1 are duplicates. A line with a
+    better neighbour goes even if that neighbour is itself a duplicate of a third, so a chain of
+    near-equal lines keeps its best member.
+    """
+    n = len(lines)
+    if n < 2:
+        return np.zeros(n, dtype=bool)
+    d = lines.directions
+    first = np.argmax(np.abs(d) > 1e-9, axis=1)
+    d = d * np.sign(d[np.arange(n), first])[:, None]
+    tol_m, tol_rad = config.duplicate_distance_m, np.deg2rad(config.duplicate_angle_deg)
+    key = np.column_stack([lines.centres / tol_m, d / tol_rad, lines.half_lengths / tol_m])
+    pairs = cKDTree(key).query_pairs(1.0, output_type="ndarray")
+    dup = np.zeros(n, dtype=bool)
+    if pairs.size:
+        i, j = pairs[:, 0], pairs[:, 1]  # i < j
+        j_better = priority[j] > priority[i]
+        dup[np.where(j_better, i, j)] = True
+    return dup
 
 
 def approach_openings(
@@ -223,49 +269,67 @@ def table_clear(
 
 
 def _mark_arcs(
-    in_x: NDArray[np.bool_],
     r: NDArray,
-    u: NDArray,
-    v: NDArray,
+    theta: NDArray,
     line: NDArray[np.int64],
     box: NDArray,
     n_roll: int,
     diff: NDArray,
 ) -> None:
-    """Add +1/-1 markers to ``diff`` (n_lines, 3 n_roll + 1) for the rolls at which each point
-    (coordinates in its line's frame) lies inside ``box`` (grasp frame, symmetric in y); ``in_x``
-    says which points lie within the box's extent along the closing axis."""
-    (_, _, z_lo), (_, y_hi, z_hi) = box
-    # The box's distance range from the line bounds r: a cheap filter before any trigonometry.
-    r_min = max(z_lo, -z_hi, 0.0)
-    r_max = np.hypot(max(abs(z_lo), abs(z_hi)), y_hi)
-    keep = in_x & (r >= r_min) & (r <= r_max)
-    r, line = r[keep], line[keep]
-    if r.size == 0:
-        return
-    theta = np.arctan2(v[keep], u[keep])
+    """Add +1/-1 markers to ``diff`` (n_lines, 4 n_roll + 1; roll ``j`` at column ``j + 2
+    n_roll``) for the rolls at which each point, at distance ``r`` and angle ``theta`` about its
+    line and within ``box``'s extent along the line, lies inside ``box`` (grasp frame,
+    symmetric in y).
+
+    The point is inside at roll ``phi`` iff ``psi = theta - phi`` has ``r cos(psi)`` in
+    ``[z_lo, z_hi]`` (``|psi|`` in ``[a_lo, a_hi]``) and ``|r sin(psi)| <= y_half`` (``|psi|``
+    in ``[0, beta]`` or ``[pi - beta, pi]``): one or two intervals of ``|psi|``, each two arcs of
+    ``phi`` that merge into one when the interval reaches 0 or pi.
+    """
+    # Python floats: they keep float32 arrays float32 (a numpy float64 scalar would not).
+    z_lo, y_hi, z_hi = float(box[0, 2]), float(box[1, 1]), float(box[1, 2])
     rs = np.maximum(r, 1e-12)
-    # |psi| for which r cos(psi) lies in [z_lo, z_hi] ...
     reach = (z_lo <= rs) & (z_hi >= -rs)
     a_lo = np.arccos(np.clip(z_hi / rs, -1.0, 1.0))
     a_hi = np.arccos(np.clip(z_lo / rs, -1.0, 1.0))
-    # ... and |r sin(psi)| <= y_half: |psi| <= beta or |psi| >= pi - beta.
     beta = np.arcsin(np.clip(y_hi / rs, 0.0, 1.0))
+    intervals = []
+    if z_hi > 0.0:  # else a_lo > pi/2 >= beta: the first interval is empty
+        intervals.append((a_lo, np.minimum(a_hi, beta)))
+    if z_lo < 0.0:  # else a_hi < pi/2 <= pi - beta: the second is empty
+        intervals.append((np.maximum(a_lo, np.pi - beta), a_hi))
     step = 2.0 * np.pi / n_roll
-    for lo, hi in ((a_lo, np.minimum(a_hi, beta)), (np.maximum(a_lo, np.pi - beta), a_hi)):
+    width = diff.shape[1]
+    first, last = [], []
+    for lo, hi in intervals:
         ok = reach & (lo <= hi)
-        if not np.any(ok):
-            continue
-        t, p, q, ln = theta[ok], lo[ok], hi[ok], line[ok]
-        # psi in [p, q] and in [-q, -p]; phi = theta - psi.
-        for start, stop in ((t - q, t - p), (t + p, t + q)):
-            j_lo = np.ceil(start / step - _ARC_SLACK).astype(np.int64) + n_roll
-            j_hi = np.floor(stop / step + _ARC_SLACK).astype(np.int64) + n_roll
-            valid = j_lo <= j_hi
-            width = diff.shape[1]
-            starts = np.bincount(ln[valid] * width + j_lo[valid], minlength=diff.size)
-            stops = np.bincount(ln[valid] * width + j_hi[valid] + 1, minlength=diff.size)
-            diff += (starts - stops).reshape(diff.shape)
+        at_zero, at_pi = lo[ok] <= _ANGLE_TOL, hi[ok] >= np.pi - _ANGLE_TOL
+        kinds = (at_zero & at_pi, at_zero & ~at_pi, ~at_zero & at_pi, ~at_zero & ~at_pi)
+        for kind, use in enumerate(kinds):
+            if not np.any(use):
+                continue
+            where = np.flatnonzero(ok)[use]
+            t, p, q = theta[where], lo[where], hi[where]
+            base = line[where] * width + 2 * n_roll
+            # phi = theta - psi for psi in [p, q] and [-q, -p]; arcs that meet merge.
+            if kind == 0:
+                arcs = [(t - np.pi, t + np.pi)]
+            elif kind == 1:
+                arcs = [(t - q, t + q)]
+            elif kind == 2:
+                arcs = [(t + p - 2.0 * np.pi, t - p)]
+            else:
+                arcs = [(t - q, t - p), (t + p, t + q)]
+            for start, stop in arcs:
+                j_lo = np.ceil(start / step - _ARC_SLACK).astype(np.int64)
+                j_hi = np.floor(stop / step + _ARC_SLACK).astype(np.int64)
+                valid = j_lo <= j_hi
+                first.append(base[valid] + j_lo[valid])
+                last.append(base[valid] + j_hi[valid] + 1)
+    if first:
+        starts = np.bincount(np.concatenate(first), minlength=diff.size)
+        stops = np.bincount(np.concatenate(last), minlength=diff.size)
+        diff += (starts - stops).reshape(diff.shape)
 
 
 def body_hits(
@@ -295,27 +359,35 @@ def body_hits(
     if lines.size == 0 or points.shape[0] == 0:
         return out
     L = cands.lines
-    reach = float(np.max(np.abs(boxes)))
     for sl in _chunks(lines.size, points.shape[0]):
         idx = lines[sl]
+        n = idx.size
         s, u, v = _line_coordinates(points, L.centres[idx], L.directions[idx], L.approach0[idx])
         r2 = u * u + v * v
-        near = (np.abs(s) <= reach) & (r2 <= 2.0 * reach * reach)
+        obstacle = None
         if obstacle_radius is not None:
-            near &= np.abs(s) <= obstacle_half_height[sl]
-            near &= r2 > obstacle_radius[sl] ** 2
-        pt, ln = np.nonzero(near)
-        s_k, u_k, v_k = s[pt, ln], u[pt, ln], v[pt, ln]
-        r = np.sqrt(r2[pt, ln])
-        n = idx.size
-        diff = np.zeros((n, 3 * n_roll + 1), dtype=np.int64)
-        chunk_boxes = boxes[sl]
+            obstacle = np.abs(s) <= obstacle_half_height[sl].astype(np.float32)
+            obstacle &= r2 > (obstacle_radius[sl] ** 2).astype(np.float32)
+        diff = np.zeros((n, 4 * n_roll + 1), dtype=np.int64)
+        chunk_boxes = boxes[sl].astype(np.float32)
         for b in range(boxes.shape[1]):
-            x_lo, x_hi = chunk_boxes[ln, b, 0, 0], chunk_boxes[ln, b, 1, 0]
-            in_x = (s_k >= x_lo) & (s_k <= x_hi)
-            _mark_arcs(in_x, r, u_k, v_k, ln, boxes[0, b], n_roll, diff)
-        covered = np.cumsum(diff, axis=1)[:, : 3 * n_roll] > 0
-        out[sl] = covered.reshape(n, 3, n_roll).any(axis=1)
+            (_, _, z_lo), (_, y_hi, z_hi) = boxes[0, b]
+            # The box's distance range from the line bounds r: a cheap filter before any
+            # trigonometry.
+            r_min = max(z_lo, -z_hi, 0.0)
+            r_max2 = max(z_lo**2, z_hi**2) + y_hi**2
+            mask = (s >= chunk_boxes[:, b, 0, 0]) & (s <= chunk_boxes[:, b, 1, 0])
+            mask &= (r2 >= r_min * r_min) & (r2 <= r_max2)
+            if obstacle is not None:
+                mask &= obstacle
+            flat = np.flatnonzero(mask)
+            if flat.size == 0:
+                continue
+            r = np.sqrt(r2.flat[flat])
+            theta = np.arctan2(v.flat[flat], u.flat[flat])
+            _mark_arcs(r, theta, flat % n, boxes[0, b], n_roll, diff)
+        covered = np.cumsum(diff, axis=1)[:, : 4 * n_roll] > 0
+        out[sl] = covered.reshape(n, 4, n_roll).any(axis=1)
     return out
 
 
@@ -326,8 +398,13 @@ def eliminate(
     config: GraspConfig,
     support_plane: NDArray | None = None,
     seed: int = 0,
+    line_priority: NDArray | None = None,
 ) -> EliminationReport:
-    """Run the rules on ``cands`` in place (fills ``rejected_by``); returns the counts."""
+    """Run the rules on ``cands`` in place (fills ``rejected_by``); returns the counts.
+
+    ``line_priority`` (L,) decides which of duplicate lines stays (higher wins; default: the
+    first); the planner passes ``h_alpha h_beta`` of each line's superquadric.
+    """
     n_roll = cands.n_roll
     L = cands.lines
     # code[line, roll]: 0 while kept, else 1 + the index of the rule that removed it.
@@ -347,6 +424,8 @@ def eliminate(
         return np.flatnonzero(np.any(code == 0, axis=1))
 
     all_lines = np.arange(len(L))
+    priority = np.zeros(len(L)) if line_priority is None else np.asarray(line_priority, float)
+    apply("duplicate", all_lines, duplicate_lines(L, priority, config))
     apply(
         "width", all_lines, 2.0 * L.half_lengths > gripper.max_opening_m - config.opening_margin_m
     )

@@ -90,6 +90,14 @@ def contact_curvature(
     return mean
 
 
+def fit_factors(
+    alphas: NDArray, betas: NDArray, config: GraspConfig
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(h_alpha, h_beta)`` of each hidden superquadric from its alpha (m) and beta."""
+    alpha_hat = np.asarray(alphas, dtype=np.float64) / config.alpha_unit_m
+    return np.exp(-(alpha_hat**2) / config.q_alpha), np.asarray(betas, dtype=np.float64) ** 2
+
+
 def score_candidates(
     cands: CandidateSet,
     superquadrics: Sequence[Superquadric],
@@ -114,9 +122,9 @@ def score_candidates(
     line_measures = {name: np.full(len(L), np.nan) for name in MEASURE_NAMES}
     if alive.size:
         src = L.source[alive]
-        alpha_hat = np.asarray(alphas, dtype=np.float64)[src] / config.alpha_unit_m
-        line_factors["h_alpha"][alive] = np.exp(-(alpha_hat**2) / config.q_alpha)
-        line_factors["h_beta"][alive] = np.asarray(betas, dtype=np.float64)[src] ** 2
+        h_alpha, h_beta = fit_factors(alphas, betas, config)
+        line_factors["h_alpha"][alive] = h_alpha[src]
+        line_factors["h_beta"][alive] = h_beta[src]
         gamma = contact_curvature(superquadrics, L, alive, config) * L.half_lengths[alive] ** 2
         with np.errstate(over="ignore", invalid="ignore"):
             h_gamma = np.exp(-(gamma**2) / config.q_gamma)

@@ -1,0 +1,123 @@
+"""Time ``plan_grasps`` on 10k-point clouds, one core: the whole planner and each stage.
+
+Clouds: the mug-like and the box-on-cylinder shapes of tests/shapes.py, and, when HSQ_YCB_DIR is
+set, the YCB mug and cracker box, each seen by the scene's two side cameras with 1 mm noise and
+resampled to exactly ``--points`` points. BLAS, OpenMP and the planner's K-means run on one
+thread. The target of tracker issue 4 is a median under 0.3 s for the whole planner; the table
+shows how far each stage is from it (stage one, recovery, dominates).
+
+    .venv/bin/python bench/bench_planner.py [--points 10000] [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from hsqbench.planner import plan_grasps  # noqa: E402
+from hsqbench.planner.api import plan_from_hidden, resolve_config  # noqa: E402
+from hsqbench.planner.recovery import recover_hidden_superquadrics  # noqa: E402
+from hsqbench.settings import ycb_dir  # noqa: E402
+from tests.shapes import (  # noqa: E402
+    cylinder_with_box_on_top,
+    mug_with_handle,
+    union_cloud,
+    visible_mask,
+)
+
+CENTRE = np.array([0.5, 0.0, 0.0])
+CAMERAS = np.array([[0.62, 0.78, 0.55], [0.62, -0.78, 0.55]])
+TABLE = (0.0, 0.0, 1.0, 0.0)
+
+
+def seen(points: np.ndarray, normals: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    mask = np.zeros(len(points), dtype=bool)
+    for camera in CAMERAS:
+        mask |= visible_mask(points, normals, camera)
+    points = points[mask]
+    points = points[rng.choice(len(points), size=n, replace=len(points) < n)]
+    return points + rng.normal(scale=0.001, size=points.shape)
+
+
+def clouds(n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    out = {}
+    for name, parts in (
+        ("mug-like", mug_with_handle(translation=CENTRE)),
+        ("box-on-cylinder", cylinder_with_box_on_top(translation=CENTRE)),
+    ):
+        cloud = union_cloud(parts, 0.0008, rng)
+        out[name] = seen(cloud.points, cloud.normals, n, rng)
+    root = ycb_dir(required=False)
+    if root is not None:
+        import trimesh
+
+        for name in ("mug", "cracker_box"):
+            mesh = trimesh.load(root / name / "textured.obj", force="mesh", process=False)
+            verts = mesh.vertices - [*mesh.vertices[:, :2].mean(axis=0), mesh.vertices[:, 2].min()]
+            mesh = trimesh.Trimesh(verts + CENTRE, mesh.faces, process=False)
+            points, faces = trimesh.sample.sample_surface(mesh, 6 * n, seed=0)
+            out[f"ycb {name}"] = seen(points, mesh.face_normals[faces], n, rng)
+    return out
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--points", type=int, default=10_000)
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
+    rng = np.random.default_rng(0)
+    config = resolve_config(None)
+    print(
+        "median seconds over repeats; 'cpu' is this process's CPU time, which a busy shared "
+        "machine inflates less than wall time"
+    )
+    print(
+        f"{'cloud':18s} {'points':>6s} {'wall':>6s} {'cpu':>6s} {'recov':>6s} {'stage2':>6s} "
+        f"{'s2 cpu':>6s} {'synth':>6s} {'elim':>6s} {'score':>6s} {'lines':>6s} {'grasps':>6s}"
+    )
+    for name, cloud in clouds(args.points, rng).items():
+        plan_grasps(cloud, config, support_plane=TABLE)  # warm-up: imports, caches
+        wall, cpu = [], []
+        stage: dict[str, list[float]] = {"recovery": [], "synthesis": [], "elimination": []}
+        stage["scoring"] = []
+        for _ in range(args.repeats):
+            start, start_cpu = time.perf_counter(), time.process_time()
+            result = plan_grasps(cloud, config, support_plane=TABLE, seed=0)
+            wall.append(time.perf_counter() - start)
+            cpu.append(time.process_time() - start_cpu)
+            for key in stage:
+                stage[key].append(result.timings[key])
+        # Stage two alone on the same hidden superquadrics, also end to end.
+        hidden = recover_hidden_superquadrics(cloud, config.recovery, seed=0)
+        two, two_cpu = [], []
+        for _ in range(args.repeats):
+            start, start_cpu = time.perf_counter(), time.process_time()
+            plan_from_hidden(cloud, hidden, config.grasp, support_plane=TABLE)
+            two.append(time.perf_counter() - start)
+            two_cpu.append(time.process_time() - start_cpu)
+        med = {k: float(np.median(v)) for k, v in stage.items()}
+        print(
+            f"{name:18s} {len(cloud):6d} {np.median(wall):6.3f} {np.median(cpu):6.3f} "
+            f"{med['recovery']:6.3f} {np.median(two):6.3f} {np.median(two_cpu):6.3f} "
+            f"{med['synthesis']:6.3f} {med['elimination']:6.3f} {med['scoring']:6.3f} "
+            f"{len(result.candidates.lines):6d} {len(result.grasps):6d}"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
