@@ -217,7 +217,9 @@ def _no_grasp_reason(
         )
     counts = cands.counts_by_reason()
     if remaining["width"] == 0:
-        distinct = remaining["duplicate"] // cands.n_roll
+        # Lines left before the width rule (rules that run first, if any, drop duplicates).
+        steps = list(remaining)
+        distinct = remaining[steps[steps.index("width") - 1]] // cands.n_roll
         narrowest = 2.0 * float(np.min(cands.lines.half_lengths))
         return (
             f"all {distinct} distinct antipodal pairs (of {len(pairs)} found) are wider than the "
@@ -287,11 +289,7 @@ def plan_antipodal(
     timings["sampling"] = time.perf_counter() - tick
 
     tick = time.perf_counter()
-    # Of near-equal lines (the ``duplicate`` rule), the more antipodal pair stays.
-    priority = -(pairs.theta_p**2 + pairs.theta_q**2)
-    report = eliminate(
-        cands, cloud, grip, gcfg, plane, 0 if seed is None else seed, line_priority=priority
-    )
+    report = eliminate(cands, cloud, grip, gcfg, plane, 0 if seed is None else seed)
     timings["elimination"] = time.perf_counter() - tick
 
     tick = time.perf_counter()
