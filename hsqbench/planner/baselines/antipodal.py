@@ -17,9 +17,9 @@ their published descriptions):
    minus the support plane's normal, or world ``-z`` without a plane).
 
 Elimination is the hsq planner's own (:func:`hsqbench.planner.elimination.eliminate` on the
-same :class:`~hsqbench.planner.candidates.CandidateSet`): width, support, table, collision and
-sweep with the same gripper and settings, so the baselines differ only in where the closing
-lines come from and how they are scored.
+same :class:`~hsqbench.planner.candidates.CandidateSet`): all of its rules (width, support,
+table, collision, sweep, and any added later) with the same gripper and settings, so the
+planners differ only in where the closing lines come from and how they are scored.
 
 Score (documented heuristic, in (0, 1]): ``h = h_antipodal * h_delta``,
 
