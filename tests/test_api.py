@@ -149,6 +149,60 @@ def test_mug_is_grasped_by_its_handle_not_through_its_body() -> None:
     assert all(abs(g.closing_axis @ handle.rotation[:, 1]) > 0.97 for g in result.grasps)
 
 
+@dataclass(frozen=True)
+class Sphere:
+    """A sphere for tests.shapes.union_cloud: radius (m) and centre (m)."""
+
+    radius: float
+    center: np.ndarray
+
+    def area(self) -> float:
+        return 4.0 * np.pi * self.radius**2
+
+    def sample_surface(self, n: int, rng: np.random.Generator):
+        d = rng.normal(size=(n, 3))
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        return self.center + self.radius * d, d
+
+    def contains(self, points, tol: float = 1e-6) -> np.ndarray:
+        return np.linalg.norm(np.asarray(points) - self.center, axis=1) <= self.radius + tol
+
+
+def test_wide_sphere_end_to_end_gets_no_grasp_and_a_reason() -> None:
+    points = seen([Sphere(0.05, np.array([0.5, 0.0, 0.05]))], seed=1)
+    result = plan_grasps(points, support_plane=TABLE, seed=1)
+    assert len(result.grasps) == 0
+    assert result.reason.startswith("no candidate survived") or "wider than" in result.reason
+    assert result.removed_by["width"] > 0
+
+
+def test_cylinder_end_to_end_is_grasped_at_many_rotations() -> None:
+    points = seen([Cylinder(0.03, 0.05, center=np.array([0.5, 0.0, 0.05]))], seed=2)
+    result = plan_grasps(points, support_plane=TABLE, seed=2)
+    closing = np.array([g.closing_axis for g in result.grasps])
+    side = np.abs(closing[:, 2]) < 0.05
+    angles = np.round(np.mod(np.degrees(np.arctan2(closing[side, 1], closing[side, 0])), 180.0))
+    assert len(set(angles)) >= 5, sorted(set(angles))
+
+
+def test_mug_end_to_end_grasps_handle_or_wall_never_inside_the_body() -> None:
+    body, handle = mug_with_handle(translation=np.array([0.5, 0.0, 0.0]))
+    points = seen([body, handle], seed=0)
+    result = plan_grasps(points, support_plane=TABLE, seed=0)
+    assert result.grasps, result.reason
+    for grasp in result.grasps:
+        on_handle = handle.contains(grasp.position[None], tol=0.003)[0]
+        radial = np.hypot(*(grasp.position[:2] - body.center[:2]))
+        on_wall = abs(radial - body.radius) < 0.01
+        assert on_handle or on_wall
+        # The fingers, open to the approach width, are never inside the body.
+        boxes = GRIPPER.boxes(opening_m=grasp.approach_width)[:2]
+        t = (np.arange(5) + 0.5) / 5
+        g = np.stack(np.meshgrid(t, t, t, indexing="ij"), axis=-1).reshape(-1, 3)
+        local = np.concatenate([lo + g * (hi - lo) for lo, hi in boxes])
+        assert not np.any(body.contains(grasp.position + local @ grasp.rotation.T))
+
+
 def test_packed_scenes_drop_the_centroid_factor() -> None:
     box = yawed_box(10.0)
     points = seen([box])

@@ -27,6 +27,9 @@ _EXPORTS = {
     "PlanningContext": "hsqbench.planner.api",
     "Planner": "hsqbench.planner.api",
     "plan_grasps": "hsqbench.planner.api",
+    "plan_from_hidden": "hsqbench.planner.api",
+    "HSQPlanner": "hsqbench.planner.api",
+    "register_planner": "hsqbench.planner.registry",
     "get_planner": "hsqbench.planner.registry",
     "planner_names": "hsqbench.planner.registry",
 }
