@@ -84,18 +84,12 @@ def _check_names(args: argparse.Namespace) -> None:
 
 
 def _recorder(path: Path | None):
+    """The Rerun episode recorder for ``--rerun`` (imported only when asked for)."""
     if path is None:
         return None
-    from hsqbench.cli import CommandError
+    from hsqbench.viz.rerun_recorder import RerunRecorder
 
-    try:
-        from hsqbench.viz.episode import EpisodeRecorder
-    except ImportError as exc:
-        raise CommandError(
-            f"--rerun is not available yet: the Rerun episode recorder (hsqbench.viz.episode) "
-            f"is not installed in this version ({exc})"
-        ) from None
-    return EpisodeRecorder(path)
+    return RerunRecorder(path)
 
 
 def _line(i: int, a) -> str:
@@ -118,12 +112,18 @@ def run(args: argparse.Namespace) -> int:
     if args.sensor is not None:
         config = replace(config, sensor=args.sensor)
     recorder = _recorder(args.rerun)
-    if args.scene == "isolated":
-        result = run_isolated_trial(args.object, args.seed, args.planner, config, recorder=recorder)
-    else:
-        result = run_packed_round(args.objects, args.seed, args.planner, config, recorder=recorder)
-    if recorder is not None and hasattr(recorder, "close"):
-        recorder.close()
+    try:
+        if args.scene == "isolated":
+            result = run_isolated_trial(
+                args.object, args.seed, args.planner, config, recorder=recorder
+            )
+        else:
+            result = run_packed_round(
+                args.objects, args.seed, args.planner, config, recorder=recorder
+            )
+    finally:
+        if recorder is not None:
+            recorder.close()
     for i, a in enumerate(result.attempts):
         print(_line(i, a))
     if args.scene == "isolated":

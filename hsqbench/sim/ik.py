@@ -71,6 +71,8 @@ class IKConfig:
         link_detection_m: obstacles closer than this to a link are constrained.
         max_waypoint_jump_rad: largest joint change between successive waypoints of a line;
             a larger one means the solution jumped branches.
+        line_refinements: times a line's sampling is doubled before a jump counts as a branch
+            change.
     """
 
     position_tolerance_m: float = 0.003
@@ -84,7 +86,7 @@ class IKConfig:
     seed_spread_rad: float = 0.6
     position_cost: float = 1.0
     orientation_cost: float = 0.5
-    posture_cost: float = 0.01
+    posture_cost: float = 0.001
     lm_damping: float = 0.01
     damping: float = 1e-6
     solver: str = "daqp"
@@ -92,6 +94,7 @@ class IKConfig:
     link_clearance_m: float = 0.01
     link_detection_m: float = 0.05
     max_waypoint_jump_rad: float = 0.35
+    line_refinements: int = 2
 
     def __post_init__(self) -> None:
         for name in (
@@ -285,6 +288,21 @@ class ArmIK:
                     best, which = d, int(g1)
         return float(best), which
 
+    def sweep_clearance(
+        self, q_from: ArrayLike, q_to: ArrayLike, max_step_rad: float = 0.1
+    ) -> tuple[float, int, float]:
+        """Smallest robot-obstacle distance along the straight joint-space move ``q_from`` ->
+        ``q_to`` (what a joint-space trajectory follows), sampled so no joint moves more than
+        ``max_step_rad`` between samples: (distance m, robot geom, path fraction there)."""
+        a, b = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
+        n = max(1, int(np.ceil(np.abs(b - a).max() / max_step_rad)))
+        worst = (np.inf, -1, 0.0)
+        for s in np.linspace(0.0, 1.0, n + 1):
+            d, g = self.clearance(a + s * (b - a))
+            if d < worst[0]:
+                worst = (d, g, float(s))
+        return worst
+
     def hand_extent(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Bounding box ``(lo, hi)`` (3,) of the hand's collision geoms (hand, fingers as
         synced, and link7, all rigid with the TCP) in the TCP frame, metres."""
@@ -443,3 +461,19 @@ class ArmIK:
             out.append(sol.q)
             q_prev = sol.q
         return PathSolution(np.array(out), True, "", sols)
+
+    def solve_line(
+        self, start: Pose, end_position: ArrayLike, n_segments: int, q_start: ArrayLike
+    ) -> PathSolution:
+        """Waypoints along a straight TCP line (constant orientation) from ``start``, the first
+        seeded with ``q_start``. A joint jump between waypoints above ``max_waypoint_jump_rad``
+        is first taken for too coarse a sampling (near a joint limit the joints may move fast
+        along the line): the line is re-solved with twice the segments, up to
+        ``line_refinements`` times; a jump that does not shrink is a branch change."""
+        n = n_segments
+        for _ in range(self.config.line_refinements + 1):
+            path = self.solve_path(line_poses(start, end_position, n), q_start)
+            if path.ok or "joint jump" not in path.reason:
+                return path
+            n *= 2
+        return path

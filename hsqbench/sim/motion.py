@@ -16,7 +16,8 @@ of the reference ``(q_d, dq_d)`` (velocity feed-forward, as a real joint-impedan
 does); without it the arm would trail the reference by ``(kv + b) / kp`` = 0.1 s.
 
 :class:`Stepper` advances the simulation one step at a time, checks that it stays finite and
-bounded (:class:`SimUnstable` otherwise), and calls the recorder at a modest rate.
+bounded (:class:`SimUnstable` otherwise; MuJoCo itself resets a state that turns NaN and only
+raises a warning counter, which is checked too), and calls the recorder at a modest rate.
 """
 
 from __future__ import annotations
@@ -31,6 +32,13 @@ from scipy.interpolate import CubicSpline
 
 from hsqbench.sim.recorder import NullRecorder, Recorder
 from hsqbench.sim.robot import Panda
+
+#: MuJoCo warnings raised when it meets NaN/inf or huge values and resets the state.
+_BAD_STATE_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC,
+)
 
 #: Peak velocity and acceleration of the minimum-jerk profile for a unit move in unit time.
 MIN_JERK_PEAK_VELOCITY = 1.875
@@ -101,9 +109,9 @@ class SimUnstable(RuntimeError):
     """The simulation produced NaN, infinite or exploding values."""
 
 
-def min_jerk(s: float) -> tuple[float, float]:
-    """Minimum-jerk profile: position and derivative (per unit s) at ``s`` in [0, 1]."""
-    s = min(max(s, 0.0), 1.0)
+def min_jerk(s: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Minimum-jerk profile: position and derivative (per unit s) at ``s`` in [0, 1] (clipped)."""
+    s = np.clip(np.asarray(s, dtype=float), 0.0, 1.0)
     return s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
 
 
@@ -125,15 +133,16 @@ class JointTrajectory:
     def end(self) -> NDArray[np.float64]:
         return self.waypoints[-1]
 
-    def sample(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Reference joint angles and velocities (7,) at time ``t`` (held at the ends)."""
-        s, ds = min_jerk(t / self.duration_s)
+    def sample(self, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Reference joint angles and velocities at time(s) ``t``: (7,) for a scalar, (n, 7) for
+        n times (held at the ends)."""
+        s, ds = min_jerk(np.asarray(t, dtype=float) / self.duration_s)
         u = s * self.segments
         du_dt = ds * self.segments / self.duration_s
         if self._spline is None:
             delta = self.waypoints[1] - self.waypoints[0]
-            return self.waypoints[0] + s * delta, du_dt * delta
-        return self._spline(u), self._spline(u, 1) * du_dt
+            return self.waypoints[0] + s[..., None] * delta, du_dt[..., None] * delta
+        return self._spline(u), self._spline(u, 1) * du_dt[..., None]
 
 
 def joint_move_duration(waypoints: NDArray[np.float64], cfg: MotionConfig) -> float:
@@ -201,13 +210,24 @@ class Stepper:
         self._lo, self._hi = panda.arm_ctrl_range.T
         self.steps = 0
         self.phase = ""
+        self._bad_state_seen = self._bad_state_count()
 
     @property
     def time_s(self) -> float:
         return float(self.data.time)
 
+    def _bad_state_count(self) -> int:
+        w = self.data.warning
+        return int(sum(w[int(k)].number for k in _BAD_STATE_WARNINGS))
+
     def _check_stable(self) -> None:
         d = self.data
+        if self._bad_state_count() > self._bad_state_seen:
+            # MuJoCo found NaN/inf or a huge value and reset the state: the episode is void.
+            raise SimUnstable(
+                f"MuJoCo reset a diverged state (bad qpos, qvel or qacc) by t = {d.time:.3f} s "
+                f"({self.phase})"
+            )
         if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
             raise SimUnstable(f"non-finite state at t = {d.time:.3f} s ({self.phase})")
         vmax = float(np.max(np.abs(d.qvel))) if d.qvel.size else 0.0
@@ -278,15 +298,15 @@ class Stepper:
         where it is (the arm is then told to hold its current position)."""
         act = self.panda.arm_actuator_ids
         ctrl = self.data.ctrl
-        t0 = self.data.time
-        ff = self._feedforward
         lo, hi = self._lo, self._hi
-
-        def command(_: int) -> None:
-            q, dq = trajectory.sample(self.data.time - t0 + self.dt)
-            ctrl[act] = np.clip(q + ff * dq, lo, hi)
-
         n = max(1, round(trajectory.duration_s / self.dt))
+        # The command applied during step i is the reference at the end of that step.
+        q, dq = trajectory.sample(self.dt * np.arange(1, n + 1))
+        commands = np.clip(q + self._feedforward * dq, lo, hi)
+
+        def command(i: int) -> None:
+            ctrl[act] = commands[i]
+
         reason = self._run(n, command, watches)
         if reason is None:
             ctrl[act] = np.clip(trajectory.end, lo, hi)

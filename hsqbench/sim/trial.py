@@ -59,7 +59,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hsqbench.config import load_config
-from hsqbench.sim.ik import ArmIK, IKConfig, IKSolution, Pose, line_poses
+from hsqbench.sim.ik import ArmIK, IKConfig, IKSolution, Pose
 from hsqbench.sim.judge import Box, JudgeConfig, SceneProbe
 from hsqbench.sim.motion import (
     JointTrajectory,
@@ -401,7 +401,7 @@ def plan_grasp_motion(
     """
     ik, ex = env.ik, env.config.execution
     first, pre = _first_pose(env, pose, clear_z)
-    back = ik.solve_path(line_poses(pose, pre.position, ex.approach_segments), at_grasp.q)
+    back = ik.solve_line(pose, pre.position, ex.approach_segments, at_grasp.q)
     if not back.ok:
         return None, f"approach {back.reason}"
     approach = back.q[::-1].copy()
@@ -409,15 +409,14 @@ def plan_grasp_motion(
     if first is not pre:
         rise = float(first.position[2] - pre.position[2])
         n = max(1, int(np.ceil(rise / ex.waypoint_spacing_m)))
-        up = ik.solve_path(line_poses(pre, first.position, n), approach[0])
+        up = ik.solve_line(pre, first.position, n, approach[0])
         if not up.ok:
             return None, f"descent from the hover pose {up.reason}"
         descent = up.q[::-1].copy()
     q_first = approach[0] if descent is None else descent[0]
     height = _lift_height(env)
-    lift = ik.solve_path(
-        line_poses(pose, pose.position + np.array([0.0, 0.0, height]), ex.lift_segments),
-        at_grasp.q,
+    lift = ik.solve_line(
+        pose, pose.position + np.array([0.0, 0.0, height]), ex.lift_segments, at_grasp.q
     )
     if not lift.ok:
         return None, f"lift {lift.reason}"
@@ -454,12 +453,28 @@ def plan_motion(env: TrialEnv, grasp: Any, clear_z: float) -> tuple[GraspMotion 
         if motion is None:
             reasons.append(f"{label}: {reason}")
             continue
+        sweep = _sweep_problem(env, q_now, motion.q_first) or _sweep_problem(
+            env, motion.lift[-1], motion.q_carry
+        )
+        if sweep:
+            reasons.append(f"{label}: joint-space move: {sweep}")
+            continue
         cost = joint_move_duration(np.stack([q_now, motion.q_first]), env.config.motion)
         if best is None or cost < best[0]:
             best = (cost, motion)
     if best is None:
         return None, "; ".join(reasons)
     return best[1], ""
+
+
+def _sweep_problem(env: TrialEnv, q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> str:
+    """Why the joint-space move ``q_from`` -> ``q_to`` is unsafe (a link passes through the table
+    or the bin), or ``""``."""
+    d, g, s = env.ik.sweep_clearance(q_from, q_to)
+    if d >= env.config.ik.clearance_m:
+        return ""
+    body = env.model.body(env.model.geom_bodyid[g]).name
+    return f"{body} would pass {-d * 1000:.0f} mm into the table or bin at {s:.0%} of the move"
 
 
 def _grasp_key(grasp: Any) -> tuple:
@@ -635,8 +650,10 @@ def execute_grasp(env: TrialEnv, motion: GraspMotion, intended: str) -> Executio
     if drop > 0.01:
         env.ik.sync(d)
         here = Pose(*panda.tcp_pose(d))
-        path = env.ik.solve_path(
-            line_poses(here, here.position - [0.0, 0.0, drop], cfg.execution.lift_segments),
+        path = env.ik.solve_line(
+            here,
+            here.position - np.array([0.0, 0.0, drop]),
+            cfg.execution.lift_segments,
             panda.arm_q(d),
         )
         if path.ok:

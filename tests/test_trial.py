@@ -1,0 +1,275 @@
+"""The trial runner (hsqbench.sim.trial): outcomes, determinism, packed rounds, recorder, CLI.
+
+Fast trials use the surface stand-in sensor (no rendering) and the procedural box; the planner
+is the paper's (``hsq``) where the test is about grasping, and small fake planners where a test
+needs a particular grasp.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hsqbench.planner.api import PlanResult
+from hsqbench.planner.grasp import Grasp
+from hsqbench.sim.motion import JointTrajectory, MotionConfig, SimUnstable, Stepper
+from hsqbench.sim.outcome import Outcome
+from hsqbench.sim.trial import (
+    TrialConfig,
+    TrialEnv,
+    load_trial_config,
+    run_isolated_trial,
+    run_packed_round,
+)
+
+TOP_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+@pytest.fixture(scope="module")
+def config() -> TrialConfig:
+    return replace(load_trial_config(), sensor="surface")
+
+
+def _timeless(result) -> dict:
+    """A result's record without wall-clock timings."""
+    out = result.to_dict()
+    for a in out["attempts"]:
+        for key in ("perception_s", "planning_s", "execution_s"):
+            a.pop(key)
+    return out
+
+
+class AbovePlanner:
+    """One top-down grasp ``height_m`` above the top of the cloud: the fingers close on air."""
+
+    name = "above"
+
+    def __init__(self, height_m: float = 0.15) -> None:
+        self.height_m = height_m
+        self.calls = 0
+
+    def plan(self, points, context) -> PlanResult:
+        self.calls += 1
+        p = np.asarray(points)
+        top = [*p[:, :2].mean(axis=0), p[:, 2].max() + self.height_m]
+        return PlanResult(grasps=[Grasp(np.array(top), TOP_DOWN, 0.05, 0.9)], planner=self.name)
+
+
+class ThroughPlanner:
+    """A side grasp whose closing point lies 7 cm beyond the object's centre along a radial
+    approach: the palm must run into the object to get there."""
+
+    name = "through"
+
+    def plan(self, points, context) -> PlanResult:
+        p = np.asarray(points)
+        c = p.mean(axis=0)
+        radial = np.array([c[0], c[1], 0.0]) / np.hypot(c[0], c[1])
+        closing = np.array([-radial[1], radial[0], 0.0])
+        rotation = np.column_stack([closing, np.cross(radial, closing), radial])
+        position = c + 0.07 * radial
+        return PlanResult(grasps=[Grasp(position, rotation, 0.05, 0.9)], planner=self.name)
+
+
+class NoPlanner:
+    name = "none"
+
+    def plan(self, points, context) -> PlanResult:
+        return PlanResult(grasps=[], reason="nothing fits", planner=self.name)
+
+
+class FarPlanner:
+    """Grasps out of the arm's reach."""
+
+    name = "far"
+
+    def plan(self, points, context) -> PlanResult:
+        grasps = [
+            Grasp(np.array([1.4, 0.0, 0.1 + 0.01 * k]), TOP_DOWN, 0.05, 0.9) for k in range(3)
+        ]
+        return PlanResult(grasps=grasps, planner=self.name)
+
+
+class CountingRecorder:
+    enabled = True
+    step_interval_s = 0.1
+
+    def __init__(self) -> None:
+        self.calls: dict[str, int] = {}
+
+    def _count(self, name: str) -> None:
+        self.calls[name] = self.calls.get(name, 0) + 1
+
+    def on_scene(self, model, data, info) -> None:
+        self._count("scene")
+
+    def on_observation(self, observation) -> None:
+        assert len(observation.points) > 0
+        self._count("observation")
+
+    def on_plan(self, plan) -> None:
+        self._count("plan")
+
+    def on_grasp(self, grasp, rank) -> None:
+        self._count("grasp")
+
+    def on_step(self, model, data, phase) -> None:
+        self._count("step")
+
+    def on_outcome(self, attempt) -> None:
+        self._count("outcome")
+
+
+def test_hsq_grasps_the_box_into_the_bin_and_is_deterministic(config):
+    first = run_isolated_trial("proc_box", 1, "hsq", config)
+    assert first.object == "proc_box" and first.seed == 1 and first.planner == "hsq"
+    [attempt] = first.attempts
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    assert first.success
+    assert attempt.target == "proc_box"
+    assert attempt.rank_executed >= 0 and attempt.n_grasps > attempt.rank_executed
+    assert set(attempt.factors) >= {"h_alpha", "h_beta", "h_gamma", "h_delta"}
+    assert attempt.score == pytest.approx(np.prod(list(attempt.factors.values())), rel=1e-6)
+    assert 0.0 < attempt.width_m <= 0.08
+    assert attempt.planning_s > 0 and attempt.execution_s > 0
+    again = run_isolated_trial("proc_box", 1, "hsq", config)
+    assert _timeless(again) == _timeless(first)
+
+
+def test_closing_on_air_is_an_empty_grasp(config):
+    planner = AbovePlanner()
+    result = run_isolated_trial("proc_box", 2, planner, config)
+    [attempt] = result.attempts
+    assert planner.calls == 1
+    assert attempt.outcome == Outcome.EMPTY_GRASP, attempt.detail
+    assert not result.success
+    assert attempt.rank_executed == 0
+    assert result.planner == "above"
+
+
+def test_ramming_the_object_is_a_collision_on_approach(config):
+    result = run_isolated_trial("proc_cylinder", 0, ThroughPlanner(), config)
+    [attempt] = result.attempts
+    assert attempt.outcome == Outcome.COLLISION_ON_APPROACH, attempt.detail
+    assert "proc_cylinder" in attempt.detail
+
+
+def test_no_grasp_and_unreachable_grasps(config):
+    none = run_isolated_trial("proc_box", 3, NoPlanner(), config).attempts[0]
+    assert none.outcome == Outcome.NO_GRASP_FOUND
+    assert none.detail == "nothing fits" and none.rank_executed == -1
+    far = run_isolated_trial("proc_box", 3, FarPlanner(), config).attempts[0]
+    assert far.outcome == Outcome.UNREACHABLE
+    assert far.rank_executed == -1 and far.n_grasps == 3
+    assert "pose error" in far.detail
+
+
+def test_packed_round_stops_after_two_consecutive_failures(config):
+    result = run_packed_round(["proc_box", "proc_cylinder"], 4, AbovePlanner(), config)
+    assert [a.outcome for a in result.attempts] == [Outcome.EMPTY_GRASP] * 2
+    assert result.objects_cleared == []
+    assert result.objects_presented == 2
+    data = result.to_dict()
+    assert data["objects_presented"] == 2 and data["objects_cleared"] == []
+
+
+def test_recorder_sees_every_stage_and_changes_nothing(config):
+    plain = run_isolated_trial("proc_box", 2, AbovePlanner(), config)
+    recorder = CountingRecorder()
+    recorded = run_isolated_trial("proc_box", 2, AbovePlanner(), config, recorder=recorder)
+    assert _timeless(recorded) == _timeless(plain)
+    for stage in ("scene", "observation", "plan", "grasp", "outcome"):
+        assert recorder.calls.get(stage) == 1, stage
+    # About one call per 0.1 s of simulated motion (several seconds of it).
+    assert recorder.calls["step"] >= 10
+
+
+def test_unknown_names_are_clear_errors(config):
+    with pytest.raises(ValueError, match="choose one of"):
+        run_isolated_trial("proc_box", 0, "no_such_planner", config)
+    with pytest.raises(ValueError, match="proc_box"):
+        run_isolated_trial("no_such_object", 0, AbovePlanner(), config)
+    with pytest.raises(TypeError, match="plan"):
+        run_isolated_trial("proc_box", 0, object(), config)
+
+
+def test_env_removes_objects_and_knows_the_bin(config):
+    with TrialEnv.build("packed", ["proc_box", "proc_cylinder"], 5, config) as env:
+        assert sorted(env.objects_on_table()) == ["proc_box", "proc_cylinder"]
+        centre = 0.5 * (env.bin_box.lo + env.bin_box.hi)
+        env.probe.set_free_pose(env.data, "proc_box", centre)
+        import mujoco
+
+        mujoco.mj_forward(env.model, env.data)
+        assert env.probe.in_bin(env.data, "proc_box")
+        assert env.objects_on_table() == ["proc_cylinder"]
+        env.remove("proc_box")
+        assert not env.probe.on_table(env.data, "proc_box")
+        obs = env.observe()
+        # Only the cylinder is left to see.
+        cyl = env.probe.position(env.data, "proc_cylinder")
+        assert np.abs(obs.points[:, :2] - cyl[:2]).max() < 0.05
+
+
+def test_motion_tracks_trajectories_and_detects_blow_ups(config):
+    with TrialEnv.build("isolated", "proc_box", 6, config) as env:
+        st, panda = env.stepper, env.panda
+        target = panda.home_arm_q + np.array([0.3, -0.2, 0.1, 0.2, 0.0, -0.2, 0.4])
+        assert st.move_joints(target) is None
+        assert np.abs(panda.arm_q(env.data) - target).max() < 2e-3
+        env.data.qvel[0] = np.nan
+        with pytest.raises(SimUnstable):
+            st.hold(0.05)
+
+
+def test_trajectory_profile_respects_limits():
+    cfg = MotionConfig()
+    w = np.zeros((3, 7))
+    w[1, 0], w[2, 0] = 0.5, 1.2
+    w[2, 3] = -0.8
+    from hsqbench.sim.motion import joint_move_duration
+
+    traj = JointTrajectory(w, joint_move_duration(w, cfg))
+    t = np.linspace(0.0, traj.duration_s, 2001)
+    q, dq = traj.sample(t)
+    assert np.allclose(q[0], w[0]) and np.allclose(q[-1], w[-1])
+    assert np.allclose(dq[0], 0.0) and np.allclose(dq[-1], 0.0)
+    assert np.all(np.abs(dq) <= cfg.joint_velocity_limit * 1.05)
+    ddq = np.gradient(dq, t, axis=0)
+    assert np.all(np.abs(ddq) <= cfg.joint_acceleration_limit * 1.1)
+    # The middle waypoint is on the path.
+    assert np.min(np.abs(q[:, 0] - 0.5)) < 1e-3
+    with pytest.raises(ValueError, match="waypoints"):
+        JointTrajectory(np.zeros((1, 7)), 1.0)
+    assert Stepper  # the class the runner drives
+
+
+def test_cli_runs_a_trial_and_writes_json(tmp_path, capsys):
+    from hsqbench.cli import main
+
+    out = tmp_path / "trial.json"
+    code = main(
+        ["trial", "--object", "proc_box", "--seed", "1", "--sensor", "surface", "--json", str(out)]
+    )
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "attempt 1: success" in printed
+    data = json.loads(out.read_text())
+    assert data["kind"] == "isolated"
+    assert [a["outcome"] for a in data["attempts"]] == ["success"]
+
+
+def test_cli_rejects_unknown_names(capsys):
+    from hsqbench.cli import main
+
+    assert main(["trial", "--object", "nope", "--sensor", "surface"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown object" in err and "proc_box" in err
+    assert main(["trial", "--object", "proc_box", "--planner", "nope"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown planner" in err and "hsq" in err
+    assert main(["trial", "--scene", "packed", "--objects", "proc_box", "nope"]) == 2
+    assert "nope" in capsys.readouterr().err
