@@ -531,7 +531,8 @@ def gaussian_curvature_local(
     curvature is unbounded at the axis endpoints when eps > 1). The centre maps to the +z tip.
 
     Math: in scaled coordinates ``q = p / scale`` the surface is ``rho(q) = 1`` with the nested lp
-    norm ``rho = ||(m, qz)||_p1``, ``m = ||(qx, qy)||_p2``, ``p = 2 / eps``. With ``a2 = |qx|/m``,
+    norm ``rho = ||(m, qz)||_p1``, ``m = ||(qx, qy)||_p2``, ``p = 2 / eps`` (rho = 1 after the
+    projection, so it drops out of the code). With ``a2 = |qx|/m``,
     ``b2 = |qy|/m``, ``a1 = m/rho``, ``b1 = |qz|/rho`` the Hessian of rho has rank 2,
     ``Hq = c1 u u^T + c2 w w^T`` with
 
@@ -543,10 +544,16 @@ def gaussian_curvature_local(
     a ratio in [0, 1] to a power that is non-negative, or at least -1 with the ratio floored by the
     axis offset, so K is finite and >= 0 (superquadrics with eps <= 2 are convex).
     """
-    q = as_points(local) / np.asarray(scale, dtype=np.float64)
-    scale = np.broadcast_to(np.asarray(scale, dtype=np.float64), q.shape)
+    local = as_points(local)
+    scale = np.broadcast_to(np.asarray(scale, dtype=np.float64), local.shape)
+    if not (np.all(scale > 0.0) and np.all(np.isfinite(scale)) and np.all(np.isfinite(local))):
+        raise ValueError("points must be finite and scales finite and positive (metres)")
+    q = local / scale
     e1 = np.broadcast_to(np.asarray(eps1, dtype=np.float64), q.shape[:1])
     e2 = np.broadcast_to(np.asarray(eps2, dtype=np.float64), q.shape[:1])
+    eps = np.concatenate([e1, e2])
+    if not np.all((eps >= EPS_MIN - 1e-9) & (eps <= EPS_MAX + 1e-9)):
+        raise ValueError(f"eps1, eps2 must lie in [{EPS_MIN}, {EPS_MAX}]")
 
     def norm(q: NDArray) -> NDArray:
         return np.sqrt(_phi(_phi(q[:, 0] ** 2, q[:, 1] ** 2, e2), q[:, 2] ** 2, e1))
@@ -561,7 +568,7 @@ def gaussian_curvature_local(
     h, r_x, r_y = _phi_ratios(sq[:, 0], sq[:, 1], e2)
     _, r_h, r_z = _phi_ratios(h, sq[:, 2], e1)
     a2, b2, a1, b1 = np.sqrt(r_x), np.sqrt(r_y), np.sqrt(r_h), np.sqrt(r_z)
-    p1, p2 = 2.0 / e1, 2.0 / e2
+    p1, p2 = np.maximum(2.0 / e1, 1.0), np.maximum(2.0 / e2, 1.0)  # eps may exceed 2 by rounding
     grad_m = sign[:, :2] * np.stack([a2 ** (p2 - 1.0), b2 ** (p2 - 1.0)], axis=1)
     grad = np.column_stack([(a1 ** (p1 - 1.0))[:, None] * grad_m, sign[:, 2] * b1 ** (p1 - 1.0)])
     u = np.column_stack([b1[:, None] * grad_m, -sign[:, 2] * a1])

@@ -414,6 +414,10 @@ def test_curvature_rows_with_own_parameters() -> None:
     single = [s.gaussian_curvature(p[None])[0] for s, p in zip(shapes, local, strict=True)]
     np.testing.assert_allclose(rows, single, rtol=1e-12)
     assert rows[1] == pytest.approx(1.0 / 0.05**2)
+    with pytest.raises(ValueError, match="eps1, eps2"):
+        gaussian_curvature_local(local, 2.5, 1.0, (0.01, 0.01, 0.01))
+    with pytest.raises(ValueError, match="finite"):
+        gaussian_curvature_local(local, 1.0, 1.0, (0.0, 0.01, 0.01))
 
 
 # ------------------------------------------------------------------------------------ mesh, volume
