@@ -11,6 +11,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from hsqbench.planner.candidates import REJECTION_REASONS
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.viz.colors import NO_SCORE_COLOR, REASON_COLORS, score_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
@@ -74,7 +75,7 @@ def test_recorded_trial_has_the_documented_entities(recorded):
     }
     assert expected <= paths, sorted(expected - paths)
     candidate_classes = {p.rsplit("/", 1)[1] for p in paths if "/candidates/" in p}
-    assert candidate_classes and candidate_classes <= {"kept", *REASON_COLORS}
+    assert candidate_classes and candidate_classes <= {"kept", *REJECTION_REASONS}
     assert ("world/planner/chosen_grasp" in paths) == (attempt.rank_executed >= 0)
     assert ("world/planner/top_grasps" in paths) == (attempt.n_grasps > 0)
     # Geometry is logged once; the collision hulls are not (configs/viewer.yaml).
@@ -234,6 +235,10 @@ def test_recording_off_does_not_import_rerun():
 
 
 # ---- the pieces --------------------------------------------------------------------------------
+
+
+def test_every_rejection_reason_has_a_colour():
+    assert set(REJECTION_REASONS) <= set(REASON_COLORS)
 
 
 def test_score_colors_span_viridis_and_grey_for_nan():

@@ -20,12 +20,15 @@ _VIRIDIS = np.array(
 
 #: Candidates removed by each elimination rule (``hsqbench.planner.candidates.REJECTION_REASONS``).
 REASON_COLORS: dict[str, tuple[int, int, int, int]] = {
+    "duplicate": (90, 110, 160, 255),  # slate: the same line exists from a better superquadric
     "width": (150, 150, 150, 255),  # grey: never a possible grasp
     "support": (255, 140, 0, 255),  # orange: nothing under a finger
     "table": (140, 80, 30, 255),  # brown: the hand would enter the table
     "collision": (220, 30, 30, 255),  # red: the hand would hit the cloud
     "sweep": (170, 60, 200, 255),  # purple: the approach would sweep through the cloud
 }
+#: A rejection reason without its own colour (a rule added after this table).
+OTHER_REASON_COLOR = (60, 60, 60, 255)
 #: Anything without a score (a superquadric with no surviving grasp).
 NO_SCORE_COLOR = (120, 120, 120, 255)
 #: The two cameras' points (left, right) and any further ones.

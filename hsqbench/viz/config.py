@@ -16,13 +16,14 @@ class ViewerConfig:
         step_interval_s: simulated seconds between two logged body poses.
         geom_groups: MuJoCo geom groups drawn as the scene and the bodies' looks.
         collision_geoms: also log the collision geoms (group 3) under ``.../collision_geoms``.
-        max_faces_per_geom: mesh geoms are decimated to at most this many triangles.
+        max_faces_per_geom: untextured mesh geoms are decimated to at most this many triangles.
         depth_unit_m: depth images are stored as uint16 multiples of this, metres.
         cloud_radius_m, inlier_radius_m: point radii of the cloud and of the superquadrics'
             inlier points, metres.
         superquadric_mesh_quarter: ``Superquadric.to_mesh`` steps per quarter arc.
         candidate_length_m, candidate_radius_m: arrow drawn for each candidate, metres.
         max_candidates: most candidates logged per class (kept, and each rejection reason).
+        max_inliers: most inlier points logged per hidden superquadric.
         top_grasps: number of best grasps drawn as outlines after planning.
         stem_length_m, outline_radius_m: gripper outline geometry, metres.
     """
@@ -38,6 +39,7 @@ class ViewerConfig:
     candidate_length_m: float = 0.02
     candidate_radius_m: float = 0.0004
     max_candidates: int = 20000
+    max_inliers: int = 1500
     top_grasps: int = 5
     stem_length_m: float = 0.05
     outline_radius_m: float = 0.001
@@ -62,8 +64,10 @@ class ViewerConfig:
             raise ValueError("viewer.superquadric_mesh_quarter must be >= 2")
         if self.max_faces_per_geom < 12:
             raise ValueError("viewer.max_faces_per_geom must be >= 12 (a box)")
-        if self.max_candidates < 1 or self.top_grasps < 0:
-            raise ValueError("viewer.max_candidates must be >= 1 and viewer.top_grasps >= 0")
+        if self.max_candidates < 1 or self.max_inliers < 1 or self.top_grasps < 0:
+            raise ValueError(
+                "viewer.max_candidates and viewer.max_inliers must be >= 1, viewer.top_grasps >= 0"
+            )
 
 
 def load_viewer_config(path: str | Path | None = "viewer") -> ViewerConfig:

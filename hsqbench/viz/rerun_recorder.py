@@ -17,10 +17,10 @@ seconds, ``MjData.time``). Entity paths:
 - ``world/cloud``: the fused, cropped cloud, coloured by camera.
 - ``world/planner/superquadrics/<i>``: hidden superquadric ``i`` as a mesh coloured by the score
   of its best grasp (grey: none), with its parameters as values; ``.../<i>/inliers``: the
-  points it explains, in the same colour.
+  points it explains (at most ``max_inliers``, evenly subsampled), in the same colour.
 - ``world/planner/candidates/<class>``: candidates as arrows along the approach axis ending at
   P_G; ``kept`` coloured by score, the others by the rule that removed them (``width``,
-  ``support``, ``table``, ``collision``, ``sweep``).
+  ``duplicate``, ``width``, ``support``, ``table``, ``collision``, ``sweep``).
 - ``world/planner/top_grasps``: outlines of the best ``top_grasps`` grasps;
   ``world/planner/chosen_grasp``: the outline of the executed one (white).
 - ``plots/gripper_width``: finger opening over time, metres.
@@ -46,7 +46,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.viz.colors import REASON_COLORS, camera_colors, score_colors
+from hsqbench.viz.colors import OTHER_REASON_COLOR, REASON_COLORS, camera_colors, score_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
 from hsqbench.viz.gripper_outline import gripper_outline
 from hsqbench.viz.scene_geometry import BodyMesh, body_meshes
@@ -55,6 +55,13 @@ TIMELINE = "sim_time"
 CHOSEN_COLOR = (255, 255, 255, 255)
 WORKSPACE_COLOR = (200, 200, 200, 255)
 CLOUD_COLOR = (230, 230, 230, 255)
+
+
+def _evenly(indices: NDArray[np.int64], cap: int) -> NDArray[np.int64]:
+    """At most ``cap`` of ``indices``, evenly spread (first and last kept)."""
+    if indices.size <= cap:
+        return indices
+    return indices[np.linspace(0, indices.size - 1, cap).round().astype(np.int64)]
 
 
 def camera_entity_name(name: str) -> str:
@@ -317,7 +324,8 @@ class RerunRecorder:
             )
             inliers = getattr(h, "inliers", None)
             if inliers is not None and self._cloud is not None:
-                pts = self._cloud[np.asarray(inliers, dtype=np.int64)]
+                idx = _evenly(np.asarray(inliers, dtype=np.int64), cfg.max_inliers)
+                pts = self._cloud[idx]
                 self.rec.log(
                     f"{path}/inliers",
                     rr.Points3D(pts, colors=colors[i], radii=cfg.inlier_radius_m),
@@ -370,19 +378,18 @@ class RerunRecorder:
     def _log_candidates(self, cands: Any) -> None:
         rr, cfg = self._rr, self.config
         positions = cands.positions
-        approach = cands.rotations[:, :, 2]
-        vectors = cfg.candidate_length_m * approach
-        for cls in ("kept", *REASON_COLORS):
-            mask = cands.kept if cls == "kept" else cands.rejected_by == cls
-            idx = np.flatnonzero(mask)
-            if idx.size > cfg.max_candidates:
-                idx = idx[np.linspace(0, idx.size - 1, cfg.max_candidates).astype(np.int64)]
-            if cls == "kept":
-                colors = score_colors(cands.scores[idx])
+        vectors = cfg.candidate_length_m * cands.rotations[:, :, 2]
+        reasons = np.asarray(cands.rejected_by)
+        for reason in np.unique(reasons):
+            idx = _evenly(np.flatnonzero(reasons == reason), cfg.max_candidates)
+            if reason == "":
+                cls, colors = "kept", score_colors(cands.scores[idx])
             else:
-                colors = np.broadcast_to(np.array(REASON_COLORS[cls], np.uint8), (idx.size, 4))
+                cls = str(reason)
+                color = REASON_COLORS.get(cls, OTHER_REASON_COLOR)
+                colors = np.broadcast_to(np.array(color, np.uint8), (idx.size, 4))
             self.rec.log(
-                f"world/planner/candidates/{cls}",
+                f"world/planner/candidates/{_part(cls)}",
                 rr.Arrows3D(
                     origins=positions[idx] - vectors[idx],
                     vectors=vectors[idx],
