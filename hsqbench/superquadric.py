@@ -622,7 +622,7 @@ def point_to_surface_alpha(points: ArrayLike, sq: Superquadric, spacing: float) 
     ``S``, the even sampling :meth:`Superquadric.sample_surface` of ``sq`` at ``spacing``.
 
     Discretisation bias: a point exactly on the surface is about ``0.4 * spacing`` from the nearest
-    sample on average (0.43 measured) and at most about ``0.9 * spacing`` (the largest holes of the
+    sample on average (0.38-0.43 measured) and at most about ``0.9 * spacing`` (the largest holes of the
     sampling), so alpha over-estimates the mean point-to-surface distance by at most about
     ``spacing / 2``, less for points off the surface (``sqrt(d^2 + r^2) - d``). Use a spacing well
     below the distances to resolve (2 mm for mm-level fits).
