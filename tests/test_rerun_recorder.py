@@ -83,6 +83,10 @@ def test_recorded_trial_has_the_documented_entities(recorded):
         summary.static_paths
     )
     assert not any(p.endswith("/collision_geoms") for p in paths)
+    # Meshes carry normals (a mesh without them is drawn unlit).
+    for entity in ("world/robot/link1", "world/planner/superquadrics/0"):
+        normals = _last_row(summary.path, entity, "Mesh3D:vertex_normals", None)
+        assert normals is not None and len(normals) > 100
     assert str(attempt.outcome) in summary.texts["outcome"]
 
 
@@ -102,7 +106,8 @@ def test_poses_follow_sim_time(recorded):
 
 
 def _last_row(path, entity: str, column: str, timeline: str | None = "sim_time"):
-    """The value of ``column`` at the latest ``timeline`` time (static if None)."""
+    """The value of ``column`` at the latest ``timeline`` time (None: of the first chunk holding
+    it, for static data)."""
     from rerun.chunk import RrdReader
 
     best, value = -np.inf, None
@@ -327,8 +332,14 @@ def test_body_meshes_in_the_body_frame_with_groups_and_decimation():
     box = m.vertices[(m.colors[:, 0] == 255) & (m.colors[:, 1] == 0)]
     assert box.min(axis=0) == pytest.approx([-0.1, 0.3, -0.3], abs=1e-6)
     assert box.max(axis=0) == pytest.approx([0.1, 0.7, 0.3], abs=1e-6)
-    ball = m.vertices[m.vertices[:, 2] > 0.5]
+    ball_mask = m.vertices[:, 2] > 0.5
+    ball = m.vertices[ball_mask]
     assert np.linalg.norm(ball - [0, 0, 1], axis=1) == pytest.approx(0.1, abs=0.01)
+    # Normals: the box's are its face directions (flat shading), the ball's point outward.
+    box_n = m.normals[(m.colors[:, 0] == 255) & (m.colors[:, 1] == 0)]
+    assert np.sort(np.abs(box_n), axis=1)[:, :2] == pytest.approx(0.0, abs=1e-6)
+    radial = (ball - [0, 0, 1]) / np.linalg.norm(ball - [0, 0, 1], axis=1, keepdims=True)
+    assert np.einsum("ij,ij->i", m.normals[ball_mask], radial).min() > 0.95
     assert m.n_faces <= 12 + 200  # the 1280-face sphere decimated
     assert m.faces.max() < len(m.vertices)
     hulls = body_meshes(model, groups=(3,))

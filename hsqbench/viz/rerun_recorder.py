@@ -163,7 +163,10 @@ class RerunRecorder:
 
     def _mesh(self, mesh: BodyMesh) -> Any:
         return self._rr.Mesh3D(
-            vertex_positions=mesh.vertices, triangle_indices=mesh.faces, vertex_colors=mesh.colors
+            vertex_positions=mesh.vertices,
+            triangle_indices=mesh.faces,
+            vertex_colors=mesh.colors,
+            vertex_normals=mesh.normals,
         )
 
     def _blueprint(self, camera_names: list[str]) -> Any:
@@ -311,6 +314,7 @@ class RerunRecorder:
                 rr.Mesh3D(
                     vertex_positions=verts.astype(np.float32),
                     triangle_indices=faces.astype(np.uint32),
+                    vertex_normals=sq.normals(verts).astype(np.float32),
                     albedo_factor=colors[i],
                 ),
                 rr.AnyValues(

@@ -37,6 +37,8 @@ class BodyMesh:
         vertices: (V, 3) float32, metres, body frame.
         faces: (F, 3) uint32 vertex indices, counter-clockwise seen from outside.
         colors: (V, 4) uint8 RGBA per vertex.
+        normals: (V, 3) float32 unit vertex normals (:func:`vertex_normals`); a viewer draws a
+            mesh without normals unlit, which hides its shape.
     """
 
     body_id: int
@@ -44,6 +46,7 @@ class BodyMesh:
     vertices: NDArray[np.float32]
     faces: NDArray[np.uint32]
     colors: NDArray[np.uint8]
+    normals: NDArray[np.float32]
 
     @property
     def n_faces(self) -> int:
@@ -55,6 +58,19 @@ class _Part:
     vertices: NDArray[np.float64]
     faces: NDArray[np.int64]
     colors: NDArray[np.uint8]
+
+
+def vertex_normals(vertices: NDArray, faces: NDArray) -> NDArray[np.float64]:
+    """Unit vertex normals (V, 3): the area-weighted sum of the adjacent faces' normals
+    (``(b - a) x (c - a)`` is twice the area along the normal); +z for unused vertices."""
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    face_n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    out = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(out, f[:, k], face_n)
+    norm = np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(norm > 0, out / np.where(norm > 0, norm, 1.0), (0.0, 0.0, 1.0))
 
 
 def _to_uint8(rgba: NDArray) -> NDArray[np.uint8]:
@@ -103,7 +119,9 @@ def _primitive(model: mujoco.MjModel, g: int) -> trimesh.Trimesh | None:
     size = np.asarray(model.geom_size[g], dtype=np.float64)
     t = mujoco.mjtGeom
     if kind == t.mjGEOM_BOX:
-        return trimesh.creation.box(extents=2.0 * size)
+        box = trimesh.creation.box(extents=2.0 * size)
+        box.unmerge_vertices()  # a vertex per face corner: flat faces, sharp edges
+        return box
     if kind == t.mjGEOM_SPHERE:
         return trimesh.creation.icosphere(subdivisions=2, radius=size[0])
     if kind == t.mjGEOM_ELLIPSOID:
@@ -235,13 +253,14 @@ def body_meshes(
     out: dict[int, BodyMesh] = {}
     for b, items in parts.items():
         offsets = np.cumsum([0] + [p.vertices.shape[0] for p in items[:-1]])
+        verts = np.concatenate([p.vertices for p in items])
+        faces = np.concatenate([p.faces + o for p, o in zip(items, offsets, strict=True)])
         out[b] = BodyMesh(
             body_id=b,
             body_name=model.body(b).name or "world",
-            vertices=np.concatenate([p.vertices for p in items]).astype(np.float32),
-            faces=np.concatenate([p.faces + o for p, o in zip(items, offsets, strict=True)]).astype(
-                np.uint32
-            ),
+            vertices=verts.astype(np.float32),
+            faces=faces.astype(np.uint32),
             colors=np.concatenate([p.colors for p in items]),
+            normals=vertex_normals(verts, faces).astype(np.float32),
         )
     return out
