@@ -13,6 +13,7 @@ import pytest
 
 from hsqbench.planner.candidates import REJECTION_REASONS
 from hsqbench.planner.gripper import GripperModel
+from hsqbench.sim.recorder import Recorder
 from hsqbench.viz.colors import NO_SCORE_COLOR, REASON_COLORS, score_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
 from hsqbench.viz.gripper_outline import gripper_outline
@@ -157,6 +158,7 @@ def test_recorded_geometry_matches_the_simulation(tmp_path):
     model, data, info = build_scene("isolated", [OBJECT], SEED)
     path = tmp_path / "manual.rrd"
     rec = RerunRecorder(path)
+    assert isinstance(rec, Recorder) and rec.enabled
     rec.on_scene(model, data, info)
     body = info.object_body_ids[OBJECT]
     # A cloud filling the object's collision hull box (the planner needs no cameras here).
