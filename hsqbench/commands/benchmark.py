@@ -59,6 +59,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="move an existing run folder aside (<name>.replaced-<time>) and start again",
     )
     parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
+    parser.add_argument(
+        "--rerun-dir",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="after the run, record trials for Rerun into DIR (replayed from their seeds)",
+    )
+    parser.add_argument(
+        "--rerun-which",
+        choices=("failures", "all"),
+        default="failures",
+        help="which trials --rerun-dir records (default: failures)",
+    )
+    parser.add_argument(
+        "--rerun-trial",
+        action="append",
+        default=None,
+        metavar="KEY",
+        help="record this trial key (as in attempts.csv) instead; repeatable",
+    )
 
 
 def _run_dir(run: str | None, config: str) -> Path:
@@ -121,6 +141,8 @@ def run(args: argparse.Namespace) -> int:
 
         written = write_report(run_dir)
         print(f"report: {run_dir / 'tables.md'} (+{len(written) - 1} files)")
+    if args.rerun_dir is not None:
+        _record_episodes(run_dir, args)
     if summary.errors:
         print(
             f"{summary.errors} trial(s) failed with an infrastructure error (see the detail "
@@ -129,3 +151,19 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def _record_episodes(run_dir: Path, args: argparse.Namespace) -> None:
+    """Replay chosen trials with the Rerun recorder; trials are deterministic per seed."""
+    from hsqbench.viz.episodes import record_run
+
+    def show(episode) -> None:
+        if episode.matches:
+            print(f"recorded {episode.path}")
+        else:
+            print(
+                f"recorded {episode.path} BUT the replay differs: "
+                f"run {episode.choice.outcomes}, replay {episode.outcomes}"
+            )
+
+    record_run(run_dir, args.rerun_dir, args.rerun_which, keys=args.rerun_trial, report=show)
