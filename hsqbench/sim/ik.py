@@ -91,8 +91,8 @@ class IKConfig:
     damping: float = 1e-6
     solver: str = "daqp"
     clearance_m: float = 0.002
-    link_clearance_m: float = 0.01
-    link_detection_m: float = 0.05
+    link_clearance_m: float = 0.005
+    link_detection_m: float = 0.02
     max_waypoint_jump_rad: float = 0.35
     line_refinements: int = 2
 

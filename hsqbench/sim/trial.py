@@ -689,6 +689,8 @@ class AttemptTrace:
         phases: simulated seconds per motion phase.
         ranks_tried: distinct grasps motion-planned (duplicates of failed ones are skipped).
         flipped: the executed grasp was the twin turned by pi.
+        scene_build_s: wall seconds of building the scene (first attempt of a trial or round;
+            0 for later attempts). The first ``perception_s`` includes making the sensor.
     """
 
     n_points: int = 0
@@ -698,6 +700,7 @@ class AttemptTrace:
     phases: dict[str, float] = field(default_factory=dict)
     ranks_tried: int = 0
     flipped: bool = False
+    scene_build_s: float = 0.0
 
 
 def resolve_planner(planner: Any, config: TrialConfig) -> Any:
@@ -713,9 +716,7 @@ def resolve_planner(planner: Any, config: TrialConfig) -> Any:
     return planner
 
 
-def run_attempt(
-    env: TrialEnv, planner: Any, packed: bool, index: int = 0
-) -> tuple[Attempt, AttemptTrace]:
+def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, AttemptTrace]:
     """Perceive, plan, motion-plan and execute one grasp (module docstring)."""
     from hsqbench.planner.api import PlanningContext
 
@@ -867,6 +868,7 @@ def run_isolated_trial(
     plan = resolve_planner(planner, cfg)
     with TrialEnv.build("isolated", object, seed, cfg, recorder) as env:
         attempt, trace = run_attempt(env, plan, packed=False)
+        trace.scene_build_s = env.info.build_time_s
         name = env.info.objects[0]
     if traces is not None:
         traces.append(trace)
@@ -897,7 +899,9 @@ def run_packed_round(
         for i in range(cfg.packed.max_attempts):
             if not env.objects_on_table():
                 break
-            attempt, trace = run_attempt(env, plan, packed=True, index=i)
+            attempt, trace = run_attempt(env, plan, packed=True)
+            if i == 0:
+                trace.scene_build_s = env.info.build_time_s
             attempts.append(attempt)
             if traces is not None:
                 traces.append(trace)
