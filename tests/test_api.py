@@ -105,7 +105,14 @@ def test_box_on_a_table_end_to_end() -> None:
     points = seen([box], seed=3)
     result = plan_grasps(points, support_plane=TABLE, seed=0)
     check_box_result(result, box)
-    assert set(result.timings) == {"recovery", "synthesis", "elimination", "scoring", "total"}
+    assert set(result.timings) == {
+        "cleaning",
+        "recovery",
+        "synthesis",
+        "elimination",
+        "scoring",
+        "total",
+    }
     assert result.hidden_superquadrics and result.candidates is not None
 
 

@@ -14,6 +14,7 @@ unit normal pointing to the free side (up, for a table).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from collections.abc import Sequence
@@ -26,12 +27,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.config import resolve_config_path
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet
+from hsqbench.planner.cleaning import clean_cloud
 from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_config
 from hsqbench.planner.elimination import RULE_DESCRIPTIONS, eliminate
 from hsqbench.planner.grasp import Grasp
 from hsqbench.planner.gripper import GripperModel, load_gripper
 from hsqbench.planner.scoring import fit_factors, score_candidates
 from hsqbench.planner.synthesis import synthesize
+from hsqbench.planner.table_lines import level_table_lines
 from hsqbench.superquadric import Superquadric, as_points
 
 
@@ -114,10 +117,12 @@ class PlanResult:
         remaining: candidates left after each step, in order: ``synthesised``, then one entry
             per elimination rule (see :data:`~hsqbench.planner.candidates.REJECTION_REASONS`).
         removed_by: how many candidates each rule removed.
-        timings: wall-clock seconds per stage (``recovery``, ``synthesis``, ``elimination``,
-            ``scoring``, ``total``).
+        timings: wall-clock seconds per stage (``cleaning``, ``recovery``, ``synthesis``,
+            ``elimination``, ``scoring``, ``total``).
         reason: why no grasp survived, in words; ``""`` when there are grasps.
         planner: the planner's name.
+        n_removed: input points the planner discarded before planning (the hsq planner's
+            cleaning of isolated points, :mod:`hsqbench.planner.cleaning`).
     """
 
     grasps: Sequence[Grasp]
@@ -128,6 +133,7 @@ class PlanResult:
     timings: dict[str, float] = field(default_factory=dict)
     reason: str = ""
     planner: str = "hsq"
+    n_removed: int = 0
 
     @property
     def best(self) -> Grasp | None:
@@ -145,6 +151,7 @@ class PlanResult:
             "removed_by": dict(self.removed_by),
             "timings": dict(self.timings),
             "reason": self.reason,
+            "n_removed": self.n_removed,
         }
 
 
@@ -229,7 +236,8 @@ def plan_from_hidden(
         config: stage-two settings; default: ``grasp:`` of ``configs/planner.yaml``.
         gripper: default: ``configs/<config.gripper>.yaml``.
         packed: leave ``h_delta`` out of the score.
-        support_plane: the table, ``(a, b, c, d)``; None: no table test.
+        support_plane: the table, ``(a, b, c, d)``; None: no table test. Lines the table
+            blocks are levelled and lifted first (:mod:`hsqbench.planner.table_lines`).
         seed: for the subset used to estimate the cloud's spacing (None = 0).
     """
     cloud = validate_cloud(points)
@@ -241,6 +249,8 @@ def plan_from_hidden(
 
     start = time.perf_counter()
     cands = synthesize(superquadrics, cfg)
+    if plane is not None:
+        level_table_lines(cands, superquadrics, plane, grip, cfg)
     timings["synthesis"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -279,6 +289,10 @@ def plan_grasps(
 ) -> PlanResult:
     """The paper's planner: hidden superquadrics (stage one), then ranked grasps (stage two).
 
+    Before both stages, isolated points (flying pixels) are removed (``cleaning:`` in the config,
+    :mod:`hsqbench.planner.cleaning`; our addition): stage two then checks collisions against the
+    cleaned cloud. ``hidden_superquadrics[i].inliers`` index ``points`` as given.
+
     Args:
         points: (N, 3) cloud of the object (or packed scene), world metres, table removed.
         config: a :class:`PlannerConfig`, a config name or a YAML path; None: planner.yaml.
@@ -293,10 +307,26 @@ def plan_grasps(
     from hsqbench.planner.recovery import recover_hidden_superquadrics
 
     start = time.perf_counter()
-    cloud = validate_cloud(points)
+    raw = validate_cloud(points)
     cfg = resolve_config(config)
+    cloud, kept = clean_cloud(raw, cfg.cleaning)
+    t_cleaning = time.perf_counter() - start
+    if cloud.shape[0] == 0:
+        return PlanResult(
+            grasps=[],
+            timings={"cleaning": t_cleaning, "total": time.perf_counter() - start},
+            reason=(
+                f"cleaning removed all {raw.shape[0]} points: none has "
+                f"{cfg.cleaning.min_neighbours} others within {cfg.cleaning.radius_m:g} m "
+                "(a cloud this sparse needs a larger cleaning.radius_m, or min_neighbours: 0)"
+            ),
+            n_removed=raw.shape[0],
+        )
+    start_recovery = time.perf_counter()
     hidden = recover_hidden_superquadrics(cloud, cfg.recovery, seed=seed)
-    t_recovery = time.perf_counter() - start
+    # Inliers index the caller's cloud, not the cleaned one.
+    hidden = [dataclasses.replace(h, inliers=kept[h.inliers]) for h in hidden]
+    t_recovery = time.perf_counter() - start_recovery
     result = plan_from_hidden(
         cloud,
         hidden,
@@ -306,7 +336,8 @@ def plan_grasps(
         support_plane=support_plane,
         seed=seed,
     )
-    result.timings = {"recovery": t_recovery, **result.timings}
+    result.n_removed = raw.shape[0] - cloud.shape[0]
+    result.timings = {"cleaning": t_cleaning, "recovery": t_recovery, **result.timings}
     result.timings["total"] = time.perf_counter() - start
     return result
 

@@ -1,7 +1,8 @@
 """Planner configuration: ``configs/planner.yaml`` loaded into typed, frozen dataclasses.
 
-Two sections, one per stage: ``recovery`` (stage one) and ``grasp`` (stage two). Every default
-here is mirrored, with its reason, in ``configs/planner.yaml``.
+Three sections: ``cleaning`` (before both stages, :mod:`hsqbench.planner.cleaning`), ``recovery``
+(stage one) and ``grasp`` (stage two). Every default here is mirrored, with its reason, in
+``configs/planner.yaml``.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from hsqbench.config import load_config
+from hsqbench.planner.cleaning import CleaningConfig
 
 
 @dataclass(frozen=True)
@@ -130,6 +132,7 @@ class GraspConfig:
 
 @dataclass(frozen=True)
 class PlannerConfig:
+    cleaning: CleaningConfig = field(default_factory=CleaningConfig)
     recovery: RecoveryConfig = field(default_factory=RecoveryConfig)
     grasp: GraspConfig = field(default_factory=GraspConfig)
 
