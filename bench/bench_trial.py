@@ -57,14 +57,18 @@ def bench_ik(seed: int = 0) -> None:
     stats: dict[str, list] = {"top-down": [], "side": []}
     for kind, target in targets:
         t0 = time.perf_counter()
-        sol = ik.solve(target, panda.home_arm_q, rng, closest_to=panda.home_arm_q)
+        # A grasp or its twin turned by pi about the approach axis, as the trial runner tries.
+        for pose in (target, target.flipped()):
+            sol = ik.solve(pose, panda.home_arm_q, rng, closest_to=panda.home_arm_q)
+            if sol.ok:
+                break
         stats[kind].append((sol.ok, sol.restarts, time.perf_counter() - t0, sol.reason))
-    print("IK over the workspace (closest-to-home selection, all restarts run):")
+    print("IK over the workspace (grasp or its twin; closest-to-home selection):")
     for kind, rows in stats.items():
         ok = [r for r in rows if r[0]]
         print(
             f"  {kind:9s}: {len(ok)}/{len(rows)} reachable, "
-            f"{np.median([r[2] for r in rows]) * 1000:.0f} ms median per solve"
+            f"{np.median([r[2] for r in rows]) * 1000:.0f} ms median per target"
         )
         for r in rows:
             if not r[0]:

@@ -59,19 +59,25 @@ class AbovePlanner:
 
 
 class ThroughPlanner:
-    """A side grasp whose closing point lies 7 cm beyond the object's centre along a radial
-    approach: the palm must run into the object to get there."""
+    """Side grasps, horizontal approach from 8 directions and 2 heights, whose closing point lies
+    7 cm beyond the object's centre: whichever the arm can reach, the palm must run into the
+    object to get there."""
 
     name = "through"
 
     def plan(self, points, context) -> PlanResult:
         p = np.asarray(points)
         c = p.mean(axis=0)
-        radial = np.array([c[0], c[1], 0.0]) / np.hypot(c[0], c[1])
-        closing = np.array([-radial[1], radial[0], 0.0])
-        rotation = np.column_stack([closing, np.cross(radial, closing), radial])
-        position = c + 0.07 * radial
-        return PlanResult(grasps=[Grasp(position, rotation, 0.05, 0.9)], planner=self.name)
+        grasps = []
+        for dz in (0.02, 0.04):
+            for k in range(8):
+                a = np.array([np.cos(k * np.pi / 4), np.sin(k * np.pi / 4), 0.0])
+                closing = np.array([-a[1], a[0], 0.0])
+                rotation = np.column_stack([closing, np.cross(a, closing), a])
+                position = c + 0.07 * a
+                position[2] = p[:, 2].max() - dz
+                grasps.append(Grasp(position, rotation, 0.05, 0.9))
+        return PlanResult(grasps=grasps, planner=self.name)
 
 
 class NoPlanner:
@@ -151,10 +157,12 @@ def test_closing_on_air_is_an_empty_grasp(config):
 
 
 def test_ramming_the_object_is_a_collision_on_approach(config):
-    result = run_isolated_trial("proc_cylinder", 0, ThroughPlanner(), config)
+    config = replace(config, max_ranks=16)
+    result = run_isolated_trial("proc_cylinder", 1, ThroughPlanner(), config)
     [attempt] = result.attempts
     assert attempt.outcome == Outcome.COLLISION_ON_APPROACH, attempt.detail
-    assert "proc_cylinder" in attempt.detail
+    assert "pushed proc_cylinder" in attempt.detail
+    assert attempt.target == "proc_cylinder"
 
 
 def test_no_grasp_and_unreachable_grasps(config):

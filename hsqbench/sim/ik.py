@@ -9,7 +9,8 @@ Levenberg-Marquardt damping). Each iteration solves a QP for the joint step ``dq
 (``mink.FrameTask``) and a light posture term (``mink.PostureTask``) that settles the seventh
 degree of freedom near home, subject to
 
-- ``mink.ConfigurationLimit``: every joint stays inside its range;
+- ``mink.ConfigurationLimit``: every joint stays inside its range (and a solution within half of
+  ``joint_limit_margin_rad`` of a limit is refused afterwards);
 - ``mink.VelocityLimit``: no joint moves more than ``max_step_rad`` per iteration (the
   integration step is 1, so a velocity is a step). A full Gauss-Newton step toward a target
   40 cm away jumps into a far, often joint-limited, branch; small steps follow the error down;
@@ -22,11 +23,14 @@ does not depend on them, so the LM damping keeps them fixed (object and finger c
 as copied from the simulation).
 
 Acceptance: a solution counts only when the TCP is within ``position_tolerance_m`` and
-``orientation_tolerance_deg`` of the target and no robot collision geom, hand included, comes
-closer than ``clearance_m`` to the table or bin (``mj_geomDistance`` after solving; for the hand
-and link7, which are rigid with the TCP, this is a property of the target itself). Restarts
-begin at the caller's seed, then the home posture, then random postures around home drawn from
-the caller's generator; a target reached with the hand in an obstacle twice is given up early.
+``orientation_tolerance_deg`` of the target, the hand, fingers and link7 stay ``clearance_m`` and
+links 1-6 ``link_clearance_m`` from the table and bin (``mj_geomDistance`` after solving; for the
+hand and link7, which are rigid with the TCP, this is a property of the target itself). Restarts
+begin at the caller's seed, then at the postures of a seed library (random postures whose TCP
+pose is nearest the target: Gauss-Newton from home drifts into twisted branches for side grasps,
+a nearby posture does not), then home turned toward the target, home, and random postures around
+home from the caller's generator; a target reached with the hand in an obstacle twice is given
+up early.
 """
 
 from __future__ import annotations
@@ -40,6 +44,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.sim.robot import Panda
+
+#: Seed of the posture library's random draw (fixed: the library is part of the solver).
+LIBRARY_SEED = 20240917
+_LIBRARIES: dict[tuple, tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]] = {}
 
 #: Rotation by pi about the TCP's approach axis: the other half of a parallel-jaw grasp.
 FLIP_ABOUT_APPROACH = np.diag([-1.0, -1.0, 1.0])
@@ -55,24 +63,32 @@ class IKConfig:
         converged_fraction: iterate until both errors are below this fraction of the tolerances.
         max_iterations: IK iterations per restart.
         max_step_rad: largest change of any joint in one iteration, rad.
+        joint_limit_margin_rad: seeds start this far inside the joint limits, and a solution
+            closer than half of it to a limit is refused (a folded arm at its limits tracks
+            poorly).
         stall_iterations: stop when the error fell by less than 1 % over this many iterations.
         restarts: solves from different seeds before a pose is declared unreachable.
         max_blocked_restarts: stop after this many solutions that reach the pose with the hand
             (or link7) touching an obstacle.
         seed_spread_rad: standard deviation of the random seeds around the home posture, rad.
+        seed_library_size: random postures drawn for the seed library (0: no library).
+        library_seeds: library postures nearest the target tried as seeds.
         position_cost, orientation_cost: weights of the TCP pose error (per metre, per radian).
         posture_cost: weight of the pull toward the home posture (per radian).
         lm_damping: Levenberg-Marquardt damping of the frame task (scaled by the squared error).
         damping: LM damping on every degree of freedom (keeps the QP well posed).
         solver: QP solver for ``mink.solve_ik``.
-        clearance_m: smallest distance between robot collision geoms and obstacles.
-        link_clearance_m: distance kept between the arm links (not the hand) and obstacles
-            while iterating (mink's ``CollisionAvoidanceLimit``); 0 turns it off.
+        clearance_m: smallest accepted distance between the hand (fingers, link7) and the
+            obstacles.
+        link_clearance_m: smallest accepted distance between links 1-6 and the obstacles, also
+            kept while iterating (mink's ``CollisionAvoidanceLimit``; 0 turns that off).
         link_detection_m: obstacles closer than this to a link are constrained.
         max_waypoint_jump_rad: largest joint change between successive waypoints of a line;
             a larger one means the solution jumped branches.
         line_refinements: times a line's sampling is doubled before a jump counts as a branch
             change.
+        sweep_step_rad: sampling of planned motions (largest joint change between samples)
+            when checking them against obstacles.
     """
 
     position_tolerance_m: float = 0.003
@@ -80,10 +96,13 @@ class IKConfig:
     converged_fraction: float = 0.25
     max_iterations: int = 60
     max_step_rad: float = 0.2
+    joint_limit_margin_rad: float = 0.05
     stall_iterations: int = 8
-    restarts: int = 6
+    restarts: int = 8
     max_blocked_restarts: int = 2
     seed_spread_rad: float = 0.6
+    seed_library_size: int = 20000
+    library_seeds: int = 5
     position_cost: float = 1.0
     orientation_cost: float = 0.5
     posture_cost: float = 0.001
@@ -95,6 +114,7 @@ class IKConfig:
     link_detection_m: float = 0.02
     max_waypoint_jump_rad: float = 0.35
     line_refinements: int = 2
+    sweep_step_rad: float = 0.015
 
     def __post_init__(self) -> None:
         for name in (
@@ -164,7 +184,8 @@ class IKSolution:
         q: arm joint angles (7,), radians (the best found, also when not ``ok``).
         ok: within the tolerances and clear of obstacles.
         position_error_m, orientation_error_deg: TCP error of ``q``.
-        clearance_m: smallest robot-obstacle distance at ``q`` (capped at the check radius).
+        clearance_m: distance to the obstacles of the robot part with the least margin over
+            its required clearance, metres (capped at 5 cm).
         restarts: solves run.
         iterations: IK iterations over all restarts.
         reason: why it failed, in words (``""`` when ``ok``).
@@ -239,6 +260,8 @@ class ArmIK:
         # Bodies rigid with the TCP: where they are follows from the target pose alone.
         link7 = model.body(panda.prefix + "link7").id
         self._rigid = np.array([panda.hand_body_id, *panda.finger_body_ids, link7])
+        rigid_geom = np.isin(model.geom_bodyid[self.robot_geoms], self._rigid)
+        self._required = np.where(rigid_geom, config.clearance_m, config.link_clearance_m)
         links = self.robot_geoms[~np.isin(model.geom_bodyid[self.robot_geoms], self._rigid)]
         if len(links) and len(self.obstacle_geoms) and config.link_clearance_m > 0:
             # Keeps the elbow and forearm off the table while iterating (the hand's own
@@ -252,6 +275,7 @@ class ArmIK:
                 )
             )
         self._qpos_template = model.qpos0.copy()
+        self._boxes: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
     # ---- state ---------------------------------------------------------------------------------
     def sync(self, data: mujoco.MjData, gripper_width_m: float | None = None) -> None:
@@ -274,33 +298,55 @@ class ArmIK:
         sid = self.panda.tcp_site_id
         return Pose(self.data.site_xpos[sid].copy(), self.data.site_xmat[sid].reshape(3, 3).copy())
 
-    def clearance(self, arm_q: ArrayLike, distmax: float | None = None) -> tuple[float, int]:
-        """Smallest distance (m) between robot collision geoms and the obstacles at ``arm_q``,
-        capped at ``distmax`` (default: 5 x ``clearance_m``), negative when penetrating; and the
-        robot geom concerned (-1 if none within ``distmax``)."""
-        dmax = 5.0 * self.config.clearance_m if distmax is None else distmax
-        self.configuration.update(self._full_q(np.asarray(arm_q, dtype=float)))
-        best, which = dmax, -1
-        for g1 in self.robot_geoms:
-            for g2 in self.obstacle_geoms:
-                d = mujoco.mj_geomDistance(self.model, self.data, int(g1), int(g2), dmax, None)
-                if d < best:
-                    best, which = d, int(g1)
-        return float(best), which
+    def clearance(self, arm_q: ArrayLike, distmax: float = 0.05) -> tuple[float, int, float]:
+        """How far the robot at ``arm_q`` is from the obstacles, against what each part needs
+        (``clearance_m`` for the hand, fingers and link7, ``link_clearance_m`` for links 1-6).
 
-    def sweep_clearance(
-        self, q_from: ArrayLike, q_to: ArrayLike, max_step_rad: float = 0.1
-    ) -> tuple[float, int, float]:
-        """Smallest robot-obstacle distance along the straight joint-space move ``q_from`` ->
-        ``q_to`` (what a joint-space trajectory follows), sampled so no joint moves more than
-        ``max_step_rad`` between samples: (distance m, robot geom, path fraction there)."""
-        a, b = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
-        n = max(1, int(np.ceil(np.abs(b - a).max() / max_step_rad)))
-        worst = (np.inf, -1, 0.0)
-        for s in np.linspace(0.0, 1.0, n + 1):
-            d, g = self.clearance(a + s * (b - a))
-            if d < worst[0]:
-                worst = (d, g, float(s))
+        Returns ``(margin, geom, distance)``: the smallest distance minus the part's required
+        clearance over robot collision geoms (negative: too close), that geom (-1 if nothing is
+        within ``distmax``) and its distance in metres (capped at ``distmax``). Only pairs whose
+        bounding sphere (robot geom) and box (obstacle) come within ``distmax`` go to the exact
+        ``mj_geomDistance``, which keeps a check at tens of microseconds."""
+        self.configuration.update(self._full_q(np.asarray(arm_q, dtype=float)))
+        best = (distmax, -1, distmax)
+        if not len(self.obstacle_geoms):
+            return best
+        d, m = self.data, self.model
+        g = self.robot_geoms
+        centres = d.geom_xpos[g] + np.einsum(
+            "gij,gj->gi", d.geom_xmat[g].reshape(-1, 3, 3), m.geom_aabb[g, :3]
+        )
+        radii = np.linalg.norm(m.geom_aabb[g, 3:], axis=1)
+        lo, hi = self._obstacle_boxes()
+        gap = np.maximum(np.maximum(lo[None] - centres[:, None], centres[:, None] - hi[None]), 0.0)
+        bound = np.linalg.norm(gap, axis=2) - radii[:, None]
+        for i, j in zip(*np.nonzero(bound < distmax), strict=True):
+            dist = mujoco.mj_geomDistance(
+                m, d, int(g[i]), int(self.obstacle_geoms[j]), distmax, None
+            )
+            margin = dist - self._required[i]
+            if margin < best[0]:
+                best = (float(margin), int(g[i]), float(dist))
+        return best
+
+    def _obstacle_boxes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """World axis-aligned boxes (lo, hi), each (n_obstacles, 3), of the (static) obstacles."""
+        if self._boxes is None:
+            d, m, o = self.data, self.model, self.obstacle_geoms
+            rot = d.geom_xmat[o].reshape(-1, 3, 3)
+            centre = d.geom_xpos[o] + np.einsum("gij,gj->gi", rot, m.geom_aabb[o, :3])
+            half = np.einsum("gij,gj->gi", np.abs(rot), m.geom_aabb[o, 3:])
+            self._boxes = (centre - half, centre + half)
+        return self._boxes
+
+    def sweep_clearance(self, qs: ArrayLike) -> tuple[float, int, float, int]:
+        """:meth:`clearance` over joint configurations ``qs`` (N, 7) sampled along a motion:
+        the worst (margin, geom, distance) and the index of that sample."""
+        worst = (np.inf, -1, np.inf, 0)
+        for k, q in enumerate(np.asarray(qs, dtype=float)):
+            margin, g, dist = self.clearance(q)
+            if margin < worst[0]:
+                worst = (margin, g, dist, k)
         return worst
 
     def hand_extent(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -333,7 +379,8 @@ class ArmIK:
     ) -> tuple[NDArray[np.float64], float, float, int]:
         cfg = self.config
         conf = self.configuration
-        conf.update(self._full_q(np.clip(q0, self.lower, self.upper)))
+        m = cfg.joint_limit_margin_rad
+        conf.update(self._full_q(np.clip(q0, self.lower + m, self.upper - m)))
         self.frame_task.set_target(
             mink.SE3.from_rotation_and_translation(
                 mink.SO3.from_matrix(target.rotation), target.position
@@ -358,24 +405,67 @@ class ArmIK:
                 and err > 0.99 * history[-1 - cfg.stall_iterations]
             ):
                 break
-            v = mink.solve_ik(conf, tasks, 1.0, cfg.solver, damping=cfg.damping, limits=self.limits)
+            try:
+                v = mink.solve_ik(
+                    conf, tasks, 1.0, cfg.solver, damping=cfg.damping, limits=self.limits
+                )
+            except mink.NoSolutionFound:  # limits that cannot all hold: as stuck as a stall
+                break
             conf.integrate_inplace(v, 1.0)
             ep, er = self._errors(target)
         q = conf.q[self.panda.arm_qpos_adr].copy()
         return q, ep, er, it
 
+    def _library(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Seed library: ``(q (L, 7), tcp positions (L, 3), tcp rotations (L, 3, 3))`` of
+        postures drawn uniformly inside the joint limits (less the margin) with a fixed seed,
+        kept when the TCP lies above the table within reach. Built once per robot geometry and
+        process (the arm's kinematics do not depend on the scene)."""
+        m, p = self.model, self.panda
+        bodies = np.asarray(p.body_ids)
+        key = (
+            m.body_pos[bodies].tobytes(),
+            m.body_quat[bodies].tobytes(),
+            m.site_pos[p.tcp_site_id].tobytes(),
+            m.site_quat[p.tcp_site_id].tobytes(),
+            self.config.seed_library_size,
+            self.config.joint_limit_margin_rad,
+        )
+        if key not in _LIBRARIES:
+            rng = np.random.default_rng(LIBRARY_SEED)
+            margin = self.config.joint_limit_margin_rad
+            qs = rng.uniform(
+                self.lower + margin, self.upper - margin, size=(self.config.seed_library_size, 7)
+            )
+            pos, rot = np.empty((len(qs), 3)), np.empty((len(qs), 3, 3))
+            for i, q in enumerate(qs):
+                pose = self.forward(q)
+                pos[i], rot[i] = pose.position, pose.rotation
+            keep = pos[:, 2] > 0.0
+            _LIBRARIES[key] = (qs[keep], pos[keep], rot[keep])
+        return _LIBRARIES[key]
+
     def seeds(
         self, target: Pose, q_seed: ArrayLike, n: int, rng: np.random.Generator | None
     ) -> list[NDArray[np.float64]]:
-        """Restart seeds: ``q_seed``; home turned about the base toward the target (the usual
-        branch: elbow up, hand in front); home; then home plus Gaussian noise of
-        ``seed_spread_rad`` from ``rng`` (none without ``rng``)."""
+        """Restart seeds, in order: ``q_seed``; the ``library_seeds`` library postures whose
+        TCP pose is nearest the target (position in units of 10 cm plus the Frobenius distance
+        of the rotations); home turned about the base toward the target; home; then home plus
+        Gaussian noise of ``seed_spread_rad`` from ``rng`` (none without ``rng``)."""
         home = self.panda.home_arm_q
+        seeds = [np.asarray(q_seed, dtype=float)]
+        k = min(self.config.library_seeds, n - 1)
+        if k > 0 and self.config.seed_library_size > 0:
+            qs, pos, rot = self._library()
+            dist = np.linalg.norm(pos - target.position, axis=1) / 0.1 + np.linalg.norm(
+                (rot - target.rotation).reshape(len(rot), 9), axis=1
+            )
+            seeds.extend(qs[np.argsort(dist, kind="stable")[:k]])
         toward = home.copy()
         toward[0] = np.clip(
             np.arctan2(target.position[1], target.position[0]), self.lower[0], self.upper[0]
         )
-        seeds = [np.asarray(q_seed, dtype=float), toward, home.copy()][:n]
+        seeds = [*seeds, toward, home.copy()][:n]
         while len(seeds) < n and rng is not None:
             seeds.append(home + rng.normal(0.0, self.config.seed_spread_rad, size=7))
         return seeds
@@ -400,6 +490,7 @@ class ArmIK:
         n = cfg.restarts if restarts is None else restarts
         home = self.panda.home_arm_q
         ref = None if closest_to is None else np.asarray(closest_to, dtype=float)
+        m = cfg.joint_limit_margin_rad
         best: IKSolution | None = None
         chosen: tuple[float, IKSolution] | None = None
         iterations = blocked = tried = 0
@@ -411,9 +502,12 @@ class ArmIK:
             clear = float("inf")
             if ep > cfg.position_tolerance_m or er > cfg.orientation_tolerance_deg:
                 reason = f"pose error {ep * 1000:.1f} mm / {er:.1f} deg after {it} iterations"
+            elif np.any(q < self.lower + 0.5 * m) or np.any(q > self.upper - 0.5 * m):
+                j = int(np.argmax(np.maximum(self.lower - q, q - self.upper)))
+                reason = f"joint {j + 1} at its limit ({q[j]:.2f} rad)"
             elif len(self.obstacle_geoms):
-                clear, geom = self.clearance(q)
-                if clear < cfg.clearance_m:
+                margin, geom, clear = self.clearance(q)
+                if margin < 0:
                     body = self.model.body(self.model.geom_bodyid[geom]).name
                     reason = f"{body} {clear * 1000:.1f} mm from the table or bin"
                     blocked += int(self.model.geom_bodyid[geom] in self._rigid)

@@ -137,23 +137,30 @@ class SceneProbe:
                 force[i] = self._wrench[0]
         return g1, g2, force
 
-    def robot_forces(self, data: mujoco.MjData) -> tuple[float, NDArray[np.float64]]:
-        """Largest robot-obstacle normal force (N) and, per object, the largest robot-object
-        normal force (N) in the current contacts."""
+    def robot_forces(self, data: mujoco.MjData) -> tuple[float, NDArray[np.float64], str]:
+        """Largest robot-obstacle normal force (N), per object the largest robot-object normal
+        force (N) in the current contacts, and the robot body in the strongest obstacle
+        contact (``""`` if none)."""
         g1, g2, f = self._contacts(data)
         per_object = np.zeros(len(self.names))
         if len(f) == 0:
-            return 0.0, per_object
+            return 0.0, per_object, ""
         k1, k2 = self.geom_kind[g1], self.geom_kind[g2]
         robot1, robot2 = k1 == -1, k2 == -1
         other = np.where(robot1, k2, np.where(robot2, k1, -3))
         robot_any = robot1 ^ robot2
         table = robot_any & (other == -2)
-        table_force = float(f[table].max()) if table.any() else 0.0
+        body = ""
+        table_force = 0.0
+        if table.any():
+            i = int(np.flatnonzero(table)[np.argmax(f[table])])
+            table_force = float(f[i])
+            robot_geom = g1[i] if robot1[i] else g2[i]
+            body = self.model.body(self.model.geom_bodyid[robot_geom]).name
         obj = robot_any & (other >= 0)
         if obj.any():
             np.maximum.at(per_object, other[obj], f[obj])
-        return table_force, per_object
+        return table_force, per_object, body
 
     def finger_contacts(self, data: mujoco.MjData) -> NDArray[np.bool_]:
         """(n_objects, 2): object k touches the left / right finger."""

@@ -3,8 +3,9 @@
 A :class:`JointTrajectory` runs through joint waypoints (K, 7) with one smooth time scaling: the
 path parameter ``u`` in [0, K - 1] follows the minimum-jerk profile
 ``u(t) = (K - 1) (10 s^3 - 15 s^4 + 6 s^5)``, ``s = t / T``, which starts and ends at rest with
-zero acceleration; between waypoints the path is a cubic spline in joint space (two waypoints: a
-straight joint-space line). The duration ``T`` is the shortest that keeps every joint within
+zero acceleration; between waypoints the path is a shape-preserving cubic (PCHIP) in joint
+space, which never overshoots the waypoints, so a path checked at its waypoints and in between
+does what was checked (two waypoints: a straight joint-space line). The duration ``T`` is the shortest that keeps every joint within
 ``speed_fraction`` of the Panda's rated joint speed and ``acceleration_fraction`` of its rated
 acceleration (peak of the profile: ``du/dt = 1.875 (K - 1) / T``,
 ``d2u/dt2 = 5.77 (K - 1) / T^2``), and, for Cartesian lines, within the TCP speed and
@@ -28,7 +29,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import PchipInterpolator
 
 from hsqbench.sim.recorder import NullRecorder, Recorder
 from hsqbench.sim.robot import Panda
@@ -127,11 +128,24 @@ class JointTrajectory:
         self.waypoints = w
         self.duration_s = float(duration_s)
         self.segments = len(w) - 1
-        self._spline = CubicSpline(np.arange(len(w)), w, bc_type="natural") if len(w) > 2 else None
+        self._spline = PchipInterpolator(np.arange(len(w)), w) if len(w) > 2 else None
 
     @property
     def end(self) -> NDArray[np.float64]:
         return self.waypoints[-1]
+
+    def path(self, max_step_rad: float) -> NDArray[np.float64]:
+        """Joint configurations (N, 7) along the path, at most ``max_step_rad`` apart in every
+        joint (for checking the motion before running it)."""
+        step = np.abs(np.diff(self.waypoints, axis=0)).max(axis=1)
+        per = np.maximum(1, np.ceil(step / max_step_rad)).astype(int)
+        u = np.concatenate([np.linspace(k, k + 1, n, endpoint=False) for k, n in enumerate(per)])
+        u = np.append(u, self.segments)
+        if self._spline is None:
+            return self.waypoints[0] + (u / self.segments)[:, None] * (
+                self.waypoints[1] - self.waypoints[0]
+            )
+        return self._spline(u)
 
     def sample(self, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Reference joint angles and velocities at time(s) ``t``: (7,) for a scalar, (n, 7) for
@@ -148,12 +162,24 @@ class JointTrajectory:
 def joint_move_duration(waypoints: NDArray[np.float64], cfg: MotionConfig) -> float:
     """Shortest minimum-jerk duration through ``waypoints`` within the joint limits of ``cfg``.
 
-    Per joint, with ``L`` the largest path derivative ``|dq/du|`` times ``K - 1`` (for two
-    waypoints, the joint's travel): ``T >= 1.875 L / v_max`` and ``T >= sqrt(5.77 L / a_max)``.
-    """
-    steps = np.abs(np.diff(waypoints, axis=0)).max(axis=0) * (len(waypoints) - 1)
-    t_v = MIN_JERK_PEAK_VELOCITY * steps / cfg.joint_velocity_limit
-    t_a = np.sqrt(MIN_JERK_PEAK_ACCELERATION * steps / cfg.joint_acceleration_limit)
+    With the path ``q(u)``, ``u = (K - 1) s(t / T)``: ``dq/dt = q'(u) du/dt`` and
+    ``d2q/dt2 = q''(u) (du/dt)^2 + q'(u) d2u/dt2``, whose peaks are bounded by
+    ``|q'|max (K-1) 1.875 / T`` and ``(|q''|max (K-1)^2 1.875^2 + |q'|max (K-1) 5.77) / T^2``
+    (per joint, derivatives of the interpolant sampled densely)."""
+    w = np.asarray(waypoints, dtype=float)
+    n = len(w) - 1
+    if n == 1:
+        d1, d2 = np.abs(w[1] - w[0]), np.zeros(7)
+    else:
+        spline = PchipInterpolator(np.arange(len(w)), w)
+        u = np.linspace(0.0, n, 40 * n + 1)
+        d1 = np.abs(spline(u, 1)).max(axis=0)
+        d2 = np.abs(spline(u, 2)).max(axis=0)
+    v, acc = cfg.joint_velocity_limit, cfg.joint_acceleration_limit
+    t_v = MIN_JERK_PEAK_VELOCITY * n * d1 / v
+    t_a = np.sqrt(
+        (d2 * (n * MIN_JERK_PEAK_VELOCITY) ** 2 + d1 * n * MIN_JERK_PEAK_ACCELERATION) / acc
+    )
     return float(max(cfg.min_move_time_s, t_v.max(), t_a.max()))
 
 

@@ -453,11 +453,19 @@ def plan_motion(env: TrialEnv, grasp: Any, clear_z: float) -> tuple[GraspMotion 
         if motion is None:
             reasons.append(f"{label}: {reason}")
             continue
-        sweep = _sweep_problem(env, q_now, motion.q_first) or _sweep_problem(
-            env, motion.lift[-1], motion.q_carry
+        checks = [
+            ("move to the first pose", (q_now, motion.q_first)),
+            ("descent", () if motion.descent is None else tuple(motion.descent)),
+            ("approach", tuple(motion.approach)),
+            ("lift", tuple(motion.lift)),
+            ("carry", (motion.lift[-1], motion.q_carry)),
+        ]
+        sweep = next(
+            (f"{name}: {p}" for name, w in checks if len(w) > 1 and (p := _sweep_problem(env, *w))),
+            "",
         )
         if sweep:
-            reasons.append(f"{label}: joint-space move: {sweep}")
+            reasons.append(f"{label}: {sweep}")
             continue
         cost = joint_move_duration(np.stack([q_now, motion.q_first]), env.config.motion)
         if best is None or cost < best[0]:
@@ -467,14 +475,17 @@ def plan_motion(env: TrialEnv, grasp: Any, clear_z: float) -> tuple[GraspMotion 
     return best[1], ""
 
 
-def _sweep_problem(env: TrialEnv, q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> str:
-    """Why the joint-space move ``q_from`` -> ``q_to`` is unsafe (a link passes through the table
-    or the bin), or ``""``."""
-    d, g, s = env.ik.sweep_clearance(q_from, q_to)
-    if d >= env.config.ik.clearance_m:
+def _sweep_problem(env: TrialEnv, *waypoints: NDArray[np.float64]) -> str:
+    """Why the motion through joint ``waypoints`` (two: a joint-space move; more: a line's IK
+    waypoints) is unsafe, a robot part coming closer to the table or bin than it may anywhere
+    along the path the trajectory follows; ``""`` when it is safe."""
+    w = np.vstack(waypoints)
+    path = JointTrajectory(w, 1.0).path(env.config.ik.sweep_step_rad)
+    margin, g, d, k = env.ik.sweep_clearance(path)
+    if margin >= 0:
         return ""
     body = env.model.body(env.model.geom_bodyid[g]).name
-    return f"{body} would pass {-d * 1000:.0f} mm into the table or bin at {s:.0%} of the move"
+    return f"{body} would come {d * 1000:.1f} mm from the table or bin at {k / max(1, len(path) - 1):.0%} of it"
 
 
 def _grasp_key(grasp: Any) -> tuple:
@@ -536,9 +547,9 @@ def _approach_watch(env: TrialEnv, start: NDArray[np.float64]):
     names = env.probe.names
 
     def watch() -> str | None:
-        table_f, obj_f = env.probe.robot_forces(env.data)
+        table_f, obj_f, body = env.probe.robot_forces(env.data)
         if table_f > j.table_contact_force_n:
-            return f"robot hit the table or bin ({table_f:.0f} N)"
+            return f"{body} hit the table or bin ({table_f:.0f} N)"
         moved = np.linalg.norm(env.probe.positions(env.data) - start, axis=1)
         pushed = (obj_f > j.object_contact_force_n) & (moved > j.pushed_distance_m)
         if pushed.any():
@@ -547,6 +558,21 @@ def _approach_watch(env: TrialEnv, start: NDArray[np.float64]):
         return None
 
     return watch
+
+
+def _line_trajectory(
+    env: TrialEnv, waypoints: NDArray[np.float64], length_m: float, kind: str
+) -> JointTrajectory:
+    """Trajectory through a straight line's IK waypoints, timed by the TCP limits of ``kind``
+    (``approach`` or ``lift``) and by the joint limits, whichever is slower."""
+    m = env.config.motion
+    speed, acc = (
+        (m.approach_speed_mps, m.approach_acceleration_mps2)
+        if kind == "approach"
+        else (m.lift_speed_mps, m.lift_acceleration_mps2)
+    )
+    duration = max(line_duration(length_m, speed, acc), joint_move_duration(waypoints, m))
+    return JointTrajectory(waypoints, duration)
 
 
 def execute_grasp(env: TrialEnv, motion: GraspMotion, intended: str) -> ExecutionResult:
@@ -576,11 +602,7 @@ def execute_grasp(env: TrialEnv, motion: GraspMotion, intended: str) -> Executio
                 - env.ik.forward(motion.descent[-1]).position
             )
         )
-        traj = JointTrajectory(
-            motion.descent,
-            line_duration(drop, cfg.motion.lift_speed_mps, cfg.motion.lift_acceleration_mps2),
-        )
-        reason = st.follow(traj, (watch,))
+        reason = st.follow(_line_trajectory(env, motion.descent, drop, "lift"), (watch,))
     mark("pregrasp", t0)
     if reason:
         return result(Outcome.COLLISION_ON_APPROACH, intended, f"moving to the pre-grasp: {reason}")
@@ -588,11 +610,7 @@ def execute_grasp(env: TrialEnv, motion: GraspMotion, intended: str) -> Executio
     t0 = d.time
     st.phase = "approach"
     length = cfg.execution.pregrasp_distance_m
-    traj = JointTrajectory(
-        motion.approach,
-        line_duration(length, cfg.motion.approach_speed_mps, cfg.motion.approach_acceleration_mps2),
-    )
-    reason = st.follow(traj, (watch,))
+    reason = st.follow(_line_trajectory(env, motion.approach, length, "approach"), (watch,))
     mark("approach", t0)
     if reason:
         return result(Outcome.COLLISION_ON_APPROACH, intended, f"approaching: {reason}")
@@ -617,12 +635,7 @@ def execute_grasp(env: TrialEnv, motion: GraspMotion, intended: str) -> Executio
 
     t0 = d.time
     st.phase = "lift"
-    traj = JointTrajectory(
-        motion.lift,
-        line_duration(
-            motion.lift_height_m, cfg.motion.lift_speed_mps, cfg.motion.lift_acceleration_mps2
-        ),
-    )
+    traj = _line_trajectory(env, motion.lift, motion.lift_height_m, "lift")
     reason = st.follow(traj, (hold,))
     mark("lift", t0)
     if reason:
@@ -657,11 +670,8 @@ def execute_grasp(env: TrialEnv, motion: GraspMotion, intended: str) -> Executio
             panda.arm_q(d),
         )
         if path.ok:
-            traj = JointTrajectory(
-                np.vstack([panda.arm_q(d), path.q[1:]]),
-                line_duration(drop, cfg.motion.lift_speed_mps, cfg.motion.lift_acceleration_mps2),
-            )
-            reason = st.follow(traj, (hold,))
+            waypoints = np.vstack([panda.arm_q(d), path.q[1:]])
+            reason = st.follow(_line_trajectory(env, waypoints, drop, "lift"), (hold,))
             if reason:
                 mark("release", t0)
                 return result(Outcome.DROPPED, target, f"lowering into the bin: {reason}")
