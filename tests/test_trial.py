@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -209,13 +210,14 @@ def test_env_removes_objects_and_knows_the_bin(config):
         assert sorted(env.objects_on_table()) == ["proc_box", "proc_cylinder"]
         centre = 0.5 * (env.bin_box.lo + env.bin_box.hi)
         env.probe.set_free_pose(env.data, "proc_box", centre)
-        import mujoco
-
         mujoco.mj_forward(env.model, env.data)
         assert env.probe.in_bin(env.data, "proc_box")
         assert env.objects_on_table() == ["proc_cylinder"]
         env.remove("proc_box")
         assert not env.probe.on_table(env.data, "proc_box")
+        parked = env.probe.position(env.data, "proc_box")
+        env.stepper.hold(0.5)
+        assert np.allclose(env.probe.position(env.data, "proc_box"), parked, atol=1e-3)
         obs = env.observe()
         # Only the cylinder is left to see.
         cyl = env.probe.position(env.data, "proc_cylinder")

@@ -73,6 +73,7 @@ class IKConfig:
         seed_spread_rad: standard deviation of the random seeds around the home posture, rad.
         seed_library_size: random postures drawn for the seed library (0: no library).
         library_seeds: library postures nearest the target tried as seeds.
+        grasp_branches: distinct solutions of a grasp pose whose motion chains are tried.
         position_cost, orientation_cost: weights of the TCP pose error (per metre, per radian).
         posture_cost: weight of the pull toward the home posture (per radian).
         lm_damping: Levenberg-Marquardt damping of the frame task (scaled by the squared error).
@@ -103,6 +104,7 @@ class IKConfig:
     seed_spread_rad: float = 0.6
     seed_library_size: int = 20000
     library_seeds: int = 5
+    grasp_branches: int = 3
     position_cost: float = 1.0
     orientation_cost: float = 0.5
     posture_cost: float = 0.001
@@ -189,6 +191,8 @@ class IKSolution:
         restarts: solves run.
         iterations: IK iterations over all restarts.
         reason: why it failed, in words (``""`` when ``ok``).
+        alternatives: other acceptable solutions on other branches (``solve`` with
+            ``closest_to``), nearest first.
     """
 
     q: NDArray[np.float64]
@@ -199,6 +203,7 @@ class IKSolution:
     restarts: int = 0
     iterations: int = 0
     reason: str = ""
+    alternatives: list[NDArray[np.float64]] = field(default_factory=list)
 
 
 @dataclass
@@ -349,6 +354,30 @@ class ArmIK:
                 worst = (margin, g, dist, k)
         return worst
 
+    def points_hit(
+        self, qs: ArrayLike, points: ArrayLike, margin_m: float, min_points: int = 1
+    ) -> tuple[int, int, int]:
+        """First sample of the motion ``qs`` (N, 7) at which a robot collision geom's bounding
+        box, grown by ``margin_m``, contains ``min_points`` or more of ``points`` (M, 3) (the
+        perceived cloud: the objects as the robot knows them). Returns ``(sample, geom,
+        n_points)``, or ``(-1, -1, 0)`` when the motion stays clear."""
+        pts = np.asarray(points, dtype=float)
+        if len(pts) == 0:
+            return -1, -1, 0
+        m, d, g = self.model, self.data, self.robot_geoms
+        centre, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:] + margin_m
+        for k, q in enumerate(np.asarray(qs, dtype=float)):
+            self.configuration.update(self._full_q(q))
+            rot = d.geom_xmat[g].reshape(-1, 3, 3)
+            # Points in each geom's frame, relative to its box centre: (G, M, 3).
+            local = np.einsum("gji,gmj->gmi", rot, pts[None] - d.geom_xpos[g][:, None])
+            inside = np.all(np.abs(local - centre[:, None]) <= half[:, None], axis=2)
+            counts = inside.sum(axis=1)
+            if counts.max() >= min_points:
+                i = int(np.argmax(counts))
+                return k, int(g[i]), int(counts[i])
+        return -1, -1, 0
+
     def hand_extent(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Bounding box ``(lo, hi)`` (3,) of the hand's collision geoms (hand, fingers as
         synced, and link7, all rigid with the TCP) in the TCP frame, metres."""
@@ -483,8 +512,9 @@ class ArmIK:
         Without ``closest_to`` the first acceptable solution is returned. With it, every restart
         runs and the acceptable solution nearest to ``closest_to`` wins (largest joint change,
         then summed squares: the shortest joint-space move), which avoids folded or turned-around
-        branches that a first hit may land in. With no acceptable solution, the one with the
-        smallest error is returned with ``ok=False``.
+        branches that a first hit may land in; the other distinct acceptable solutions (more
+        than 0.1 rad apart) are kept in ``alternatives``, nearest first. With no acceptable
+        solution, the one with the smallest error is returned with ``ok=False``.
         """
         cfg = self.config
         n = cfg.restarts if restarts is None else restarts
@@ -492,7 +522,7 @@ class ArmIK:
         ref = None if closest_to is None else np.asarray(closest_to, dtype=float)
         m = cfg.joint_limit_margin_rad
         best: IKSolution | None = None
-        chosen: tuple[float, IKSolution] | None = None
+        accepted: list[tuple[float, IKSolution]] = []
         iterations = blocked = tried = 0
         for seed in self.seeds(target, q_seed, n, rng):
             q, ep, er, it = self._descend(target, seed, home)
@@ -516,18 +546,22 @@ class ArmIK:
                 if ref is None:
                     return sol
                 dq = np.abs(q - ref)
-                cost = float(dq.max() + 0.1 * np.sqrt(dq @ dq))
-                if chosen is None or cost < chosen[0]:
-                    chosen = (cost, sol)
+                accepted.append((float(dq.max() + 0.1 * np.sqrt(dq @ dq)), sol))
             elif best is None or (ep, er) < (best.position_error_m, best.orientation_error_deg):
                 best = sol
-            if chosen is None and blocked >= cfg.max_blocked_restarts:
+            if not accepted and blocked >= cfg.max_blocked_restarts:
                 # The pose is reached but the hand (or link7, rigid with it) is in the table or
                 # bin: the target fixes where they are, so other arm postures cannot help.
                 break
-        if chosen is not None:
-            chosen[1].restarts, chosen[1].iterations = tried, iterations
-            return chosen[1]
+        if accepted:
+            accepted.sort(key=lambda a: a[0])
+            chosen = accepted[0][1]
+            chosen.restarts, chosen.iterations = tried, iterations
+            # Other distinct solutions (other branches), nearest first.
+            for _, other in accepted[1:]:
+                if all(np.abs(other.q - a).max() > 0.1 for a in [chosen.q, *chosen.alternatives]):
+                    chosen.alternatives.append(other.q)
+            return chosen
         assert best is not None
         best.restarts, best.iterations = tried, iterations
         best.reason = f"unreachable after {tried} restart(s): {best.reason}"

@@ -6,7 +6,8 @@ One attempt (:func:`run_attempt`):
    fast :mod:`hsqbench.sim.surface_sensor` stand-in), with the arm at home, out of view.
 2. **Plan** with the planner (``PlanningContext``: table plane, ``packed``, seed, cameras,
    workspace). No grasp: ``no_grasp_found``.
-3. **Motion plan** the grasps in score order, up to ``max_ranks``: for each, of the grasp and its
+3. **Motion plan** the grasps in score order (equal scores, such as the rolls of one closing
+   line, with the most easily reached approach first), up to ``max_ranks``: for each, of the grasp and its
    twin rotated by pi about the approach axis (the same parallel-jaw grasp) the one nearer the
    home hand orientation is tried first, then the other. A grasp is executable when IK
    (:mod:`hsqbench.sim.ik`) solves its pre-grasp (``pregrasp_distance_m`` back along the approach
@@ -59,7 +60,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hsqbench.config import load_config
-from hsqbench.sim.ik import ArmIK, IKConfig, IKSolution, Pose
+from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.sim.ik import ArmIK, IKConfig, Pose
 from hsqbench.sim.judge import Box, JudgeConfig, SceneProbe
 from hsqbench.sim.motion import (
     JointTrajectory,
@@ -74,6 +76,17 @@ from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
 from hsqbench.sim.recorder import NullRecorder, Recorder
 from hsqbench.sim.robot import Panda
 from hsqbench.sim.surface_sensor import SurfaceSensor, SurfaceSensorConfig
+
+#: Where removed objects are parked (metres; far outside the table, cameras and arm).
+PARK_X_M, PARK_Y_M = 10.0, 10.0
+
+#: Name of the joint-space move to the first pose in reasons.
+MOVE_IN = "move to the first pose"
+
+#: Grasps looked at per rank tried when ordering ties (see :func:`_execution_order`).
+TIE_WINDOW = 8
+#: Weight of "away from the robot" against "down" in the easy approach direction.
+EASY_APPROACH_OUTWARD = 0.4
 
 #: Independent random streams drawn from a trial's seed.
 _STREAMS = ("perception_calibration", "perception_noise", "ik", "planner")
@@ -91,6 +104,12 @@ class ExecutionConfig:
         hover_clearance_m: gap between the hand's lowest point and the cloud's top at the hover
             pose (straight above a pre-grasp that is lower than that).
         waypoint_spacing_m: IK waypoint spacing on the descent from the hover pose.
+        hover_raise_m: how much higher the hover pose goes when the joint-space move to the
+            lower one would swing the arm through the objects.
+        cloud_voxel_m: the cloud is thinned to this voxel size for the arm's collision checks.
+        cloud_clearance_m: the arm's bounding boxes, grown by this, must hold fewer than
+            ``cloud_min_points`` cloud points on the way to the pre-grasp.
+        cloud_min_points: that many points in a box are an obstacle (fewer: sensor outliers).
         carry_clearance_m: height of the object's bottom above the bin walls while carried.
         release_height_m: height of the object's bottom above the bin floor at release.
         retreat_height_m: TCP rise before returning home after an attempt (packed rounds).
@@ -103,6 +122,10 @@ class ExecutionConfig:
     lift_segments: int = 4
     hover_clearance_m: float = 0.03
     waypoint_spacing_m: float = 0.05
+    hover_raise_m: float = 0.15
+    cloud_voxel_m: float = 0.01
+    cloud_clearance_m: float = 0.01
+    cloud_min_points: int = 3
     carry_clearance_m: float = 0.04
     release_height_m: float = 0.03
     retreat_height_m: float = 0.1
@@ -152,7 +175,7 @@ class TrialConfig:
     perception: str = "perception"
     surface: SurfaceSensorConfig = field(default_factory=SurfaceSensorConfig)
     planner_config: str | None = None
-    max_ranks: int = 8
+    max_ranks: int = 24
     min_cloud_points: int = 30
     execution: ExecutionConfig = field(default_factory=ExecutionConfig)
     ik: IKConfig = field(default_factory=IKConfig)
@@ -205,7 +228,6 @@ class TrialEnv:
         obstacles = np.array([info.table_geom_id, *info.bin_geom_ids], dtype=int)
         self.ik = ArmIK(model, self.panda, config.ik, obstacles)
         self.ik.sync(data, self.panda.max_width())
-        self.home_tcp = self.ik.forward(self.panda.home_arm_q)
         #: (lo, hi) bounding box of the open hand in the TCP frame, metres.
         self.hand_box = self.ik.hand_extent()
         self.bin_box = Box(np.asarray(info.bin_min, float), np.asarray(info.bin_max, float))
@@ -270,9 +292,8 @@ class TrialEnv:
     def _make_sensor(self) -> Any:
         cfg = self.config
         if cfg.sensor == "surface":
-            present = {n: a for n, a in self.assets.items()}
             return SurfaceSensor(
-                present,
+                self.assets,
                 self.info.object_body_ids,
                 [self.model.camera(c.name).id for c in self.info.depth_cameras],
                 self.info.workspace_min,
@@ -310,10 +331,15 @@ class TrialEnv:
         ]
 
     def remove(self, name: str) -> None:
-        """Take an object out of the scene: parked on the floor far from everything."""
+        """Take an object out of the scene: parked far away, floating (gravity compensated),
+        with its collisions off, so it never touches anything again."""
         k = self.info.objects.index(name)
-        floor_z = -0.75 + 0.3  # well above the floor plane; it falls and rests there
-        self.probe.set_free_pose(self.data, name, np.array([5.0 + 1.0 * k, 5.0, floor_z]))
+        body = self.info.object_body_ids[name]
+        self.model.body_gravcomp[body] = 1.0
+        geoms = self.model.geom_bodyid == body
+        self.model.geom_contype[geoms] = 0
+        self.model.geom_conaffinity[geoms] = 0
+        self.probe.set_free_pose(self.data, name, np.array([PARK_X_M + k, PARK_Y_M, 1.0]))
         self.removed.add(name)
         mujoco.mj_forward(self.model, self.data)
 
@@ -389,9 +415,9 @@ def _first_pose(env: TrialEnv, pose: Pose, clear_z: float) -> tuple[Pose, Pose]:
 
 
 def plan_grasp_motion(
-    env: TrialEnv, pose: Pose, flipped: bool, clear_z: float, at_grasp: IKSolution
+    env: TrialEnv, pose: Pose, flipped: bool, clear_z: float, q_grasp: NDArray[np.float64]
 ) -> tuple[GraspMotion | None, str]:
-    """IK for every phase of one grasp pose, given its solution ``at_grasp``; ``(None, reason)``
+    """IK for every phase of one grasp pose, given its solution ``q_grasp``; ``(None, reason)``
     when a phase is unreachable.
 
     The chain is solved from the grasp outward (the grasp pose is the hardest: nearest the table
@@ -401,7 +427,7 @@ def plan_grasp_motion(
     """
     ik, ex = env.ik, env.config.execution
     first, pre = _first_pose(env, pose, clear_z)
-    back = ik.solve_line(pose, pre.position, ex.approach_segments, at_grasp.q)
+    back = ik.solve_line(pose, pre.position, ex.approach_segments, q_grasp)
     if not back.ok:
         return None, f"approach {back.reason}"
     approach = back.q[::-1].copy()
@@ -416,7 +442,7 @@ def plan_grasp_motion(
     q_first = approach[0] if descent is None else descent[0]
     height = _lift_height(env)
     lift = ik.solve_line(
-        pose, pose.position + np.array([0.0, 0.0, height]), ex.lift_segments, at_grasp.q
+        pose, pose.position + np.array([0.0, 0.0, height]), ex.lift_segments, q_grasp
     )
     if not lift.ok:
         return None, f"lift {lift.reason}"
@@ -432,40 +458,46 @@ def plan_grasp_motion(
     )
 
 
-def plan_motion(env: TrialEnv, grasp: Any, clear_z: float) -> tuple[GraspMotion | None, str]:
+def plan_motion(
+    env: TrialEnv, grasp: Any, clear_z: float, cloud: NDArray[np.float64]
+) -> tuple[GraspMotion | None, str]:
     """Plan a planner grasp and its twin turned by pi about the approach axis (the same
     parallel-jaw grasp); of the two, the one whose first pose the arm reaches with the shorter
-    joint-space move. The grasp pose is solved with restarts, keeping the solution nearest the
-    arm's current angles."""
+    joint-space move.
+
+    The grasp pose is solved with restarts; its solutions (branches), nearest the arm's current
+    angles first, are tried for the whole chain (:func:`plan_grasp_motion`), which must then
+    keep clear of the table and bin everywhere and of the cloud on the way in
+    (:func:`_motion_problem`). A joint-space move that would swing through the objects (it is
+    a straight line in joint space, not in space) is retried with the hover pose raised by
+    ``hover_raise_m``, so the hand turns over the objects and comes down on a vertical line.
+    """
     ik, panda, rng = env.ik, env.panda, env.rngs["ik"]
     ik.sync(env.data, panda.max_width())
     q_now = panda.arm_q(env.data)
     pose = Pose(grasp.position, grasp.rotation)
     best: tuple[float, GraspMotion] | None = None
     reasons = []
+    heights = (clear_z, clear_z + env.config.execution.hover_raise_m)
     for p, flipped in ((pose, False), (pose.flipped(), True)):
         label = "flipped" if flipped else "as planned"
         at_grasp = ik.solve(p, q_now, rng, closest_to=q_now)
         if not at_grasp.ok:
             reasons.append(f"{label}: grasp pose {at_grasp.reason}")
             continue
-        motion, reason = plan_grasp_motion(env, p, flipped, clear_z, at_grasp)
+        motion, reason = None, ""
+        for q_grasp in [at_grasp.q, *at_grasp.alternatives][: env.config.ik.grasp_branches]:
+            for z in heights:
+                motion, reason = plan_grasp_motion(env, p, flipped, z, q_grasp)
+                if motion is not None:
+                    reason = _motion_problem(env, motion, q_now, cloud)
+                    motion = None if reason else motion
+                if motion is not None or not reason.startswith(MOVE_IN):
+                    break
+            if motion is not None:
+                break
         if motion is None:
             reasons.append(f"{label}: {reason}")
-            continue
-        checks = [
-            ("move to the first pose", (q_now, motion.q_first)),
-            ("descent", () if motion.descent is None else tuple(motion.descent)),
-            ("approach", tuple(motion.approach)),
-            ("lift", tuple(motion.lift)),
-            ("carry", (motion.lift[-1], motion.q_carry)),
-        ]
-        sweep = next(
-            (f"{name}: {p}" for name, w in checks if len(w) > 1 and (p := _sweep_problem(env, *w))),
-            "",
-        )
-        if sweep:
-            reasons.append(f"{label}: {sweep}")
             continue
         cost = joint_move_duration(np.stack([q_now, motion.q_first]), env.config.motion)
         if best is None or cost < best[0]:
@@ -473,6 +505,24 @@ def plan_motion(env: TrialEnv, grasp: Any, clear_z: float) -> tuple[GraspMotion 
     if best is None:
         return None, "; ".join(reasons)
     return best[1], ""
+
+
+def _motion_problem(
+    env: TrialEnv, motion: GraspMotion, q_now: NDArray[np.float64], cloud: NDArray[np.float64]
+) -> str:
+    """Why a planned grasp motion is unsafe (``""`` if it is not): a robot part too near the
+    table or bin anywhere along it, or the arm passing through the cloud on the way in."""
+    checks = [
+        (MOVE_IN, (q_now, motion.q_first)),
+        ("descent", () if motion.descent is None else tuple(motion.descent)),
+        ("approach", tuple(motion.approach)),
+        ("lift", tuple(motion.lift)),
+        ("carry", (motion.lift[-1], motion.q_carry)),
+    ]
+    for name, waypoints in checks:
+        if len(waypoints) > 1 and (problem := _sweep_problem(env, *waypoints)):
+            return f"{name}: {problem}"
+    return _cloud_problem(env, cloud, (q_now, motion.q_first), motion.descent)
 
 
 def _sweep_problem(env: TrialEnv, *waypoints: NDArray[np.float64]) -> str:
@@ -486,6 +536,43 @@ def _sweep_problem(env: TrialEnv, *waypoints: NDArray[np.float64]) -> str:
         return ""
     body = env.model.body(env.model.geom_bodyid[g]).name
     return f"{body} would come {d * 1000:.1f} mm from the table or bin at {k / max(1, len(path) - 1):.0%} of it"
+
+
+def _cloud_problem(
+    env: TrialEnv, cloud: NDArray[np.float64], *motions: Sequence[NDArray[np.float64]] | None
+) -> str:
+    """Why a move toward the grasp would run the arm into the perceived objects (the cloud),
+    or ``""``: checked for the joint-space move to the first pose and the descent, which must
+    pass clear of everything (the approach itself enters between the objects' surfaces, as the
+    planner checked)."""
+    names = (MOVE_IN, "descent")
+    for name, waypoints in zip(names, motions, strict=False):
+        if waypoints is None or len(waypoints) < 2:
+            continue
+        path = JointTrajectory(np.vstack(waypoints), 1.0).path(env.config.ik.sweep_step_rad)
+        ex = env.config.execution
+        k, g, n = env.ik.points_hit(path, cloud, ex.cloud_clearance_m, ex.cloud_min_points)
+        if k >= 0:
+            body = env.model.body(env.model.geom_bodyid[g]).name
+            where = k / max(1, len(path) - 1)
+            return f"{name}: {body} would pass through {n} cloud points at {where:.0%} of it"
+    return ""
+
+
+def _execution_order(grasps: Sequence[Any], window: int) -> list[int]:
+    """Ranks of the first ``window`` grasps in the order they are tried: by score, best first;
+    among equal scores (the rolls of one closing line score the same, and the planner leaves
+    their order arbitrary) the approach nearest "down and away from the robot" first, the
+    direction the arm reaches most easily."""
+    n = min(window, len(grasps))
+    keys = []
+    for r in range(n):
+        g = grasps[r]
+        p, a = np.asarray(g.position), np.asarray(g.rotation)[:, 2]
+        radial = np.array([p[0], p[1], 0.0]) / max(float(np.hypot(p[0], p[1])), 1e-9)
+        easy = radial * EASY_APPROACH_OUTWARD + np.array([0.0, 0.0, -1.0])
+        keys.append((-round(float(g.score), 9), -float(a @ easy), r))
+    return [k[2] for k in sorted(keys)]
 
 
 def _grasp_key(grasp: Any) -> tuple:
@@ -775,13 +862,16 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
     t0 = time.perf_counter()
     motion, rank, reasons = None, -1, []
     clear_z = float(points[:, 2].max()) + cfg.execution.hover_clearance_m
+    cloud = voxel_downsample(points, cfg.execution.cloud_voxel_m).points
     seen: set[tuple] = set()
-    for r in range(min(cfg.max_ranks, len(grasps))):
+    for r in _execution_order(grasps, cfg.max_ranks * TIE_WINDOW):
+        if trace.ranks_tried >= cfg.max_ranks:
+            break
         key = _grasp_key(grasps[r])
         if key in seen:  # a duplicate of a grasp that already failed (planners emit twins)
             continue
         seen.add(key)
-        motion, reason = plan_motion(env, grasps[r], clear_z)
+        motion, reason = plan_motion(env, grasps[r], clear_z, cloud)
         trace.ranks_tried += 1
         if motion is not None:
             rank = r
