@@ -50,15 +50,18 @@ from hsqbench.settings import cache_dir  # noqa: E402
 
 #: Spacing of the ground-truth mesh samples, metres (the fused cloud's 2 mm voxel).
 GT_SPACING_M = 0.002
+#: Part of the cache key: bump when the cached content changes.
+CACHE_VERSION = 2
 
 
-def mesh_samples(model, data, body_id: int, rng: np.random.Generator) -> np.ndarray:
-    """World points on the visual meshes of a body, about one per GT_SPACING_M^2 of area."""
+def mesh_samples(model, data, body_id: int, rng: np.random.Generator):
+    """World points on the visual meshes of a body, about one per GT_SPACING_M^2 of area, and
+    their unit normals (the triangles' winding: outward for the YCB meshes)."""
     import mujoco
 
     from hsqbench.sim.objects import VISUAL_GROUP
 
-    out = []
+    points, normals = [], []
     for g in np.flatnonzero(model.geom_bodyid == body_id):
         if model.geom_group[g] != VISUAL_GROUP or model.geom_type[g] != mujoco.mjtGeom.mjGEOM_MESH:
             continue
@@ -67,7 +70,8 @@ def mesh_samples(model, data, body_id: int, rng: np.random.Generator) -> np.ndar
         f0, nf = model.mesh_faceadr[m], model.mesh_facenum[m]
         verts = model.mesh_vert[v0 : v0 + nv].astype(float)
         tri = verts[model.mesh_face[f0 : f0 + nf]]
-        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        area = 0.5 * np.linalg.norm(cross, axis=1)
         n = int(np.ceil(area.sum() / GT_SPACING_M**2))
         pick = rng.choice(nf, size=n, p=area / area.sum())
         a, b = rng.random((2, n))
@@ -75,34 +79,45 @@ def mesh_samples(model, data, body_id: int, rng: np.random.Generator) -> np.ndar
         a[swap], b[swap] = 1 - a[swap], 1 - b[swap]
         t = tri[pick]
         local = t[:, 0] + a[:, None] * (t[:, 1] - t[:, 0]) + b[:, None] * (t[:, 2] - t[:, 0])
-        out.append(data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T)
-    return np.concatenate(out)
+        rot = data.geom_xmat[g].reshape(3, 3)
+        points.append(data.geom_xpos[g] + local @ rot.T)
+        unit = cross[pick] / np.maximum(2.0 * area[pick], 1e-18)[:, None]
+        normals.append(unit @ rot.T)
+    return np.concatenate(points), np.concatenate(normals)
 
 
-def observe(name: str, seed: int, sensor: str | None, refresh: bool) -> dict[str, np.ndarray]:
-    """Cloud, table plane and ground-truth mesh samples of one isolated scene (cached)."""
+def observe(
+    name: str, seed: int, sensor: str | None, refresh: bool, scene: str | None = None
+) -> dict[str, np.ndarray]:
+    """Cloud, table plane and ground-truth mesh samples of one isolated scene (cached).
+
+    ``scene``: a scene config name or YAML path (default ``configs/scene.yaml``)."""
     from hsqbench.sim.perception import Perception, load_perception_config
     from hsqbench.sim.scene import build_scene, load_scene_config
 
     pcfg = load_perception_config()
     if sensor is not None:
         pcfg = dataclasses.replace(pcfg, sensor_model=sensor)
-    key = json.dumps([to_dict(load_scene_config()), to_dict(pcfg), name, seed], sort_keys=True)
+    scfg = load_scene_config("scene" if scene is None else scene)
+    key = json.dumps([CACHE_VERSION, to_dict(scfg), to_dict(pcfg), name, seed], sort_keys=True)
     digest = hashlib.sha256(key.encode()).hexdigest()[:16]
     path = cache_dir() / "eval_planner_ycb" / f"{name}_s{seed}_{pcfg.sensor_model}_{digest}.npz"
     if path.exists() and not refresh:
         with np.load(path) as f:
             return dict(f)
-    model, data, info = build_scene("isolated", [name], seed=seed)
+    model, data, info = build_scene("isolated", [name], seed=seed, scene_config=scfg)
     rng = np.random.default_rng(seed)
     with Perception.from_scene(model, info, rng=rng, config=pcfg) as perception:
         obs = perception.observe(data, rng)
-    body = info.object_body_ids[name]
+    truth, normals = mesh_samples(
+        model, data, info.object_body_ids[name], np.random.default_rng(seed)
+    )
     out = {
         "points": obs.points,
         "camera_index": obs.camera_index,
         "support_plane": np.asarray(info.support_plane, float),
-        "truth": mesh_samples(model, data, body, np.random.default_rng(seed)),
+        "truth": truth,
+        "truth_normals": normals,
     }
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, **out)
@@ -147,6 +162,7 @@ def main() -> int:
     parser.add_argument("--seeds", nargs="*", type=int, default=[0, 1, 2])
     parser.add_argument("--sensor", default=None, help="override perception.yaml sensor_model")
     parser.add_argument("--config", default=None, help="planner config name or path")
+    parser.add_argument("--scene", default=None, help="scene config name or path (cameras)")
     parser.add_argument("--refresh", action="store_true", help="re-render cached clouds")
     parser.add_argument("-v", "--verbose", action="store_true", help="candidates after each rule")
     args = parser.parse_args()
@@ -156,7 +172,7 @@ def main() -> int:
     rows = []
     for name in names:
         for seed in args.seeds:
-            obs = observe(name, seed, args.sensor, args.refresh)
+            obs = observe(name, seed, args.sensor, args.refresh, args.scene)
             plane = obs["support_plane"]
             if not rows:  # warm-up: imports and config parsing stay out of the first time
                 plan_grasps(obs["points"][:500], args.config, support_plane=plane, seed=seed)

@@ -249,7 +249,7 @@ def plan_from_hidden(
 
     start = time.perf_counter()
     cands = synthesize(superquadrics, cfg)
-    if plane is not None:
+    if plane is not None and cfg.level_table_lines:
         level_table_lines(cands, superquadrics, plane, grip, cfg)
     timings["synthesis"] = time.perf_counter() - start
 

@@ -71,6 +71,7 @@ class GraspConfig:
     round_eps2_tol: float = 0.25
     round_axis_ratio_tol: float = 0.1
     max_tilt_deg: float = 15.0
+    level_table_lines: bool = True
     # Elimination.
     duplicate_distance_m: float = 0.003
     duplicate_angle_deg: float = 3.0
