@@ -27,8 +27,10 @@ class RecoveryConfig:
     max_fit_points: int = 1500
     # Seeds: the paper's K rule, counted on a cloud of the paper's sensor density.
     k_count_voxel_m: float = 0.002
-    max_parts: int = 16
+    kmeans_parts_factor: float = 2.0
+    max_parts: int = 32
     kmeans_n_init: int = 1
+    duplicate_iou: float = 0.8
     # Probabilistic model.
     outlier_weight: float = 0.2
     hidden_outlier_weight: float = 0.9
@@ -39,7 +41,11 @@ class RecoveryConfig:
     em_tolerance: float = 1e-3
     max_switches: int = 2
     hidden_max_switches: int = 1
+    switch_tolerance: float = 0.05
+    switch_candidates: int = 3
     switch_iterations: int = 3
+    switch_gain: float = 0.1
+    start_eps: tuple[tuple[float, float], ...] = ((1.0, 1.0), (0.3, 0.3), (1.7, 1.7))
     dual_scale_ratio: float = 0.7
     eps_min: float = 0.1
     eps_max: float = 2.0
@@ -50,6 +56,29 @@ class RecoveryConfig:
     inlier_threshold: float = 0.5
     surface_spacing_m: float = 0.002
     coverage_distance_m: float = 0.004
+
+    def __post_init__(self) -> None:
+        positive = (
+            "voxel_size_m",
+            "k_count_voxel_m",
+            "kmeans_parts_factor",
+            "scale_min_m",
+            "sigma_min_m",
+            "surface_spacing_m",
+            "coverage_distance_m",
+        )
+        for name in positive:
+            if not getattr(self, name) > 0.0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
+        for name in ("outlier_weight", "hidden_outlier_weight", "inlier_threshold"):
+            if not 0.0 < getattr(self, name) < 1.0:
+                raise ValueError(f"{name} must lie in (0, 1), got {getattr(self, name)}")
+        if not 0.0 < self.eps_min < self.eps_max <= 2.0:
+            raise ValueError(f"need 0 < eps_min < eps_max <= 2, got {self.eps_min}, {self.eps_max}")
+        if self.max_fit_points < 11 or self.max_parts < 1 or self.em_max_iterations < 1:
+            raise ValueError("max_fit_points >= 11, max_parts >= 1, em_max_iterations >= 1")
+        if not self.start_eps:
+            raise ValueError("start_eps needs at least one (eps1, eps2) pair")
 
 
 @dataclass(frozen=True)

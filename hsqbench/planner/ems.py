@@ -2,28 +2,35 @@
 
 Model (Liu et al., CVPR 2022, adopted by the paper): a point is an outlier with probability
 ``w_o``, uniform over the workspace volume V (density 1/V), or an inlier drawn from an isotropic
-Gaussian of std sigma around the surface, measured here by the signed radial distance ``r``
+Gaussian of std sigma around the surface, measured by the scaled radial distance ``d``
 (:mod:`hsqbench.planner.radial`). The paper infers the same model with the optimisation-based
 Gibbs sampler of Wu et al. (ECCV 2022); we use EM, its deterministic counterpart:
 
-- E-step: inlier posterior ``p_i = 1 / (1 + k exp(r_i² / 2 sigma²))`` with
+- E-step: inlier posterior ``p_i = 1 / (1 + k exp(d_i² / 2 sigma²))`` with
   ``k = w_o (1/V) / ((1 - w_o) (2 pi sigma²)^(-3/2))``.
-- M-step: a few Levenberg-Marquardt steps on ``sum_i p_i r_i²`` (analytic Jacobian, eps and
-  scales clipped to their bounds), then ``sigma² = sum p r² / (3 sum p)``, floored.
-- Cost: the negative log-likelihood of the mixture per point,
-  ``-mean log((1 - w_o) N(r; sigma) + w_o / V)`` in nats.
-- Switching: when the cost stalls, candidate superquadrics that describe a similar surface with
-  other parameters are tried, and the best one (after a few EM iterations each) is kept if it
-  lowers the cost. Candidates: the two cyclic permutations of the axes (so each axis in turn
-  becomes z, with eps1 and eps2 as they are or swapped), and, in each such frame whose x and y
-  scales are close, the cross-section duality ``eps2 -> 2 - eps2`` with a 45 degree turn about z
-  (a square with half side a is a diamond with half diagonal a sqrt(2): the scale goes to
-  ``a 2^((1 - eps2) / 2)``). These escape the two usual local minima: a wrong choice of the
-  symmetry axis, and a near-square cross-section fitted with the wrong eps2 branch.
+- M-step: ``lm_steps`` Levenberg-Marquardt steps on ``sum_i c_i p_i d_i²`` (analytic Jacobian on
+  the points with ``p_i > active_weight``; eps and scales clipped to their bounds; ``c_i`` the
+  number of input points a voxel centroid stands for), then ``sigma² = sum c p d² / (3 sum c p)``,
+  floored at ``sigma_min_m²``.
+- Cost: the negative log-likelihood of the mixture per input point,
+  ``-sum c log((1 - w_o) N(d; sigma) + w_o / V) / sum c`` in nats.
+- Switching: each time EM stalls (the cost falls by less than ``switch_tolerance`` in an
+  iteration), up to ``max_switches`` times, candidate superquadrics that describe a similar
+  surface with other parameters are ranked by their cost, and the best few get
+  ``switch_iterations`` EM iterations each; the first that beats the current cost replaces it.
+  Candidates, as in EMS: the two cyclic permutations of the axes with eps1 and eps2 swapped (so
+  each axis in turn becomes the z axis), and, in each of the three frames whose x and y scales
+  are within ``dual_scale_ratio``, the cross-section duality ``eps2 -> 2 - eps2`` with a 45 degree
+  turn about z (a square of half side a is a diamond of half diagonal a sqrt(2); the scale goes to
+  ``a 2^((1 - eps2) / 2)``, exact at eps2 = 0, 1, 2). These escape the two usual local minima: a
+  wrong symmetry axis, and a near-square cross-section fitted on the wrong eps2 branch. Stalls
+  come early (the first one within a few iterations), before a hidden-part seed has grown, so
+  switching corrects the seed's frame rather than moving it to another part.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,13 +38,15 @@ from numpy.typing import NDArray
 from scipy.special import expit
 
 from hsqbench.planner.config import RecoveryConfig
-from hsqbench.planner.radial import SQState, apply_increment, radial_residual
+from hsqbench.planner.radial import Evaluation, SQState, apply_increment, evaluate, jacobian
 
 Array = NDArray[np.float64]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 #: Largest change of a log-scale in one LM step; keeps exp() finite on a wild step.
 _MAX_LOG_STEP = 2.0
+#: Levenberg-Marquardt damping: start, bounds, and the factors on success and failure.
+_LAMBDA = (1e-2, 1e-7, 1e7, 0.3, 10.0)
 
 
 @dataclass(frozen=True)
@@ -54,21 +63,31 @@ class MixtureModel:
             np.log(w) - np.log(self.volume_m3) - np.log1p(-w) + 1.5 * (_LOG_2PI + np.log(sigma2))
         )
 
-    def posterior(self, r: Array, sigma2: float) -> Array:
+    def posterior(self, d: Array, sigma2: float) -> Array:
         """Inlier posterior of each point (N,)."""
-        return expit(-(self.log_k(sigma2) + r * r / (2.0 * sigma2)))
+        return expit(-(self.log_k(sigma2) + d * d / (2.0 * sigma2)))
 
-    def nll(self, r: Array, sigma2: float, weights: Array) -> float:
+    def nll(self, d: Array, sigma2: float, weights: Array) -> float:
         """Negative log-likelihood per point (nats), each point counted ``weights`` times."""
         w = self.outlier_weight
-        log_in = np.log1p(-w) - 1.5 * (_LOG_2PI + np.log(sigma2)) - r * r / (2.0 * sigma2)
+        log_in = np.log1p(-w) - 1.5 * (_LOG_2PI + np.log(sigma2)) - d * d / (2.0 * sigma2)
         log_out = np.log(w) - np.log(self.volume_m3)
         return float(-(weights @ np.logaddexp(log_in, log_out)) / weights.sum())
 
 
 @dataclass
 class EMSResult:
-    """Outcome of one EMS run on the (downsampled) points it was given."""
+    """Outcome of one EMS run on the (downsampled) points it was given.
+
+    Attributes:
+        state: the fitted superquadric.
+        posterior: (N,) inlier posterior of each point at the end.
+        sigma_m: noise std, metres.
+        cost: negative log-likelihood per input point, nats.
+        iterations: EM iterations run, those of switching candidates included.
+        switches: how many switching rounds replaced the solution.
+        stopped: the ``stop`` test of :func:`ems_fit` ended the run early.
+    """
 
     state: SQState
     posterior: Array
@@ -76,10 +95,21 @@ class EMSResult:
     cost: float
     iterations: int
     switches: int
+    stopped: bool = False
+
+
+@dataclass
+class _Point:
+    """Where EM stands: state, its evaluation, sigma² and cost."""
+
+    state: SQState
+    ev: Evaluation
+    sigma2: float
+    cost: float
 
 
 class _Fitter:
-    """One EMS run: the points, the model, the bounds and the iteration counters."""
+    """One EMS run: the points, the model, the bounds and the iteration counter."""
 
     def __init__(
         self,
@@ -88,8 +118,11 @@ class _Fitter:
         model: MixtureModel,
         scale_max_m: float,
         cfg: RecoveryConfig,
+        stop: Callable[[Array], bool] | None = None,
     ) -> None:
-        self.points = points
+        self.stop = stop
+        self.stopped = False
+        self.points_t = np.ascontiguousarray(points.T)
         self.weights = weights
         self.model = model
         self.cfg = cfg
@@ -98,66 +131,74 @@ class _Fitter:
         self.sigma2_min = cfg.sigma_min_m**2
         self.iterations = 0
 
-    # ------------------------------------------------------------------ building blocks
-    def _sigma2(self, r: Array, p: Array) -> float:
-        wp = self.weights * p
-        total = float(wp.sum())
-        if total <= 0.0:
-            return max(float(np.mean(r * r) / 3.0), self.sigma2_min)
-        return max(float(wp @ (r * r)) / (3.0 * total), self.sigma2_min)
+    def _sigma2(self, ev: Evaluation, w: Array, fallback: float) -> float:
+        total = float(w.sum())
+        sigma2 = float(w @ (ev.d * ev.d)) / (3.0 * total) if total > 0.0 else fallback
+        return max(sigma2, self.sigma2_min)
 
-    def _m_step(self, state: SQState, p: Array, lam: float) -> tuple[SQState, float]:
-        """A few LM steps on ``sum p r²`` over the points that still carry weight."""
-        active = p > self.cfg.active_weight
-        if int(active.sum()) < state.scale.size + 8:
-            active = np.ones_like(p, dtype=bool)
-        x, w = self.points[active], (self.weights * p)[active]
-        r, jac = radial_residual(x, state, jacobian=True)
-        cost = float(w @ (r * r))
-        for _ in range(self.cfg.lm_steps):
-            wj = jac * w[:, None]
-            h = jac.T @ wj
-            g = wj.T @ r
-            diag = np.diag(h).copy()
-            diag = np.maximum(diag, 1e-12 * max(float(diag.max()), 1e-300))
+    def _at(self, state: SQState, sigma2: float) -> _Point:
+        ev = evaluate(self.points_t, state)
+        return _Point(state, ev, sigma2, self.model.nll(ev.d, sigma2, self.weights))
+
+    def _m_step(
+        self, state: SQState, ev: Evaluation, w: Array, lam: float, steps: int
+    ) -> tuple[SQState, Evaluation, float, float]:
+        """``steps`` LM steps on ``sum w d²``, the Jacobian on the points that carry weight.
+
+        Returns the state, its evaluation, the final damping and the final ``sum w d²``.
+        """
+        active = np.flatnonzero(w > self.cfg.active_weight * self.weights)
+        if active.size < 2 * state.scale.size + 5:
+            active = np.arange(w.size)
+        w_act = w[active]
+        cost = float(w @ (ev.d * ev.d))
+        fresh = True
+        for _ in range(steps):
+            if fresh:
+                jac = jacobian(ev, active)
+                wj = jac * w_act
+                h = wj @ jac.T
+                g = wj @ ev.d[active]
+                diag = np.maximum(np.diag(h), 1e-12 * max(float(np.diag(h).max()), 1e-300))
             try:
                 delta = -np.linalg.solve(h + lam * np.diag(diag), g)
             except np.linalg.LinAlgError:
-                lam *= 10.0
+                fresh = False
+                lam = min(lam * _LAMBDA[4], _LAMBDA[2])
                 continue
             delta[2:5] = np.clip(delta[2:5], -_MAX_LOG_STEP, _MAX_LOG_STEP)
             trial = apply_increment(state, delta, self.eps_bounds, self.scale_bounds)
-            r_new, jac_new = radial_residual(x, trial, jacobian=True)
-            cost_new = float(w @ (r_new * r_new))
-            if np.isfinite(cost_new) and cost_new < cost:
-                state, r, jac, cost = trial, r_new, jac_new, cost_new
-                lam = max(lam * 0.3, 1e-7)
+            trial_ev = evaluate(self.points_t, trial)
+            trial_cost = float(w @ (trial_ev.d * trial_ev.d))
+            fresh = bool(np.isfinite(trial_cost) and trial_cost < cost)
+            if fresh:
+                state, ev, cost = trial, trial_ev, trial_cost
+                lam = max(lam * _LAMBDA[3], _LAMBDA[1])
             else:
-                lam = min(lam * 10.0, 1e7)
-        return state, lam
+                lam = min(lam * _LAMBDA[4], _LAMBDA[2])
+        return state, ev, lam, cost
 
-    def _run(
-        self, state: SQState, sigma2: float, max_iter: int
-    ) -> tuple[SQState, float, float, Array]:
-        """Plain EM until the cost stalls or ``max_iter``; returns state, sigma², cost, residuals."""
-        r, _ = radial_residual(self.points, state)
-        cost = self.model.nll(r, sigma2, self.weights)
-        lam = 1e-2
+    def _run(self, at: _Point, max_iter: int, tolerance: float) -> _Point:
+        """EM until the cost falls by less than ``tolerance`` in one iteration, or ``max_iter``."""
+        lam = _LAMBDA[0]
         for _ in range(max_iter):
-            p = self.model.posterior(r, sigma2)
-            new_state, lam = self._m_step(state, p, lam)
-            new_r, _ = radial_residual(self.points, new_state)
-            new_sigma2 = self._sigma2(new_r, p)
-            new_cost = self.model.nll(new_r, new_sigma2, self.weights)
+            p = self.model.posterior(at.ev.d, at.sigma2)
+            if self.stop is not None and self.stop(p):
+                self.stopped = True
+                break
+            w = self.weights * p
+            state, ev, lam, _ = self._m_step(at.state, at.ev, w, lam, self.cfg.lm_steps)
+            sigma2 = self._sigma2(ev, w, at.sigma2)
+            cost = self.model.nll(ev.d, sigma2, self.weights)
             self.iterations += 1
-            if not np.isfinite(new_cost):
+            if not np.isfinite(cost):
                 break
-            improved = cost - new_cost
-            if new_cost < cost:
-                state, r, sigma2, cost = new_state, new_r, new_sigma2, new_cost
-            if improved < self.cfg.em_tolerance:
+            improved = at.cost - cost
+            if cost < at.cost:
+                at = _Point(state, ev, sigma2, cost)
+            if improved < tolerance:
                 break
-        return state, sigma2, cost, r
+        return at
 
     # ------------------------------------------------------------------ switching
     def candidates(self, state: SQState) -> list[SQState]:
@@ -165,17 +206,15 @@ class _Fitter:
         out: list[SQState] = []
         for shift in (0, 1, 2):
             perm = np.roll(np.arange(3), -shift)
-            rot = state.rotation[:, perm]
-            scale = state.scale[perm]
-            eps_pairs = [(state.eps1, state.eps2), (state.eps2, state.eps1)]
-            if state.eps1 == state.eps2:
-                eps_pairs = eps_pairs[:1]
-            for e1, e2 in eps_pairs:
-                if shift > 0 or (e1, e2) != (state.eps1, state.eps2):
-                    out.append(SQState(e1, e2, scale.copy(), rot.copy(), state.translation.copy()))
-                ratio = min(scale[0], scale[1]) / max(scale[0], scale[1])
-                if ratio >= self.cfg.dual_scale_ratio:
-                    out.append(self._dual(SQState(e1, e2, scale, rot, state.translation)))
+            e1, e2 = (state.eps1, state.eps2) if shift == 0 else (state.eps2, state.eps1)
+            frame = SQState(
+                e1, e2, state.scale[perm], state.rotation[:, perm], state.translation.copy()
+            )
+            if shift > 0:
+                out.append(frame)
+            ratio = min(frame.scale[0], frame.scale[1]) / max(frame.scale[0], frame.scale[1])
+            if ratio >= self.cfg.dual_scale_ratio:
+                out.append(self._dual(frame))
         return out
 
     def _dual(self, state: SQState) -> SQState:
@@ -186,25 +225,56 @@ class _Fitter:
         eps2 = float(np.clip(2.0 - state.eps2, *self.eps_bounds))
         return SQState(state.eps1, eps2, scale, state.rotation @ turn, state.translation.copy())
 
+    def _switch(self, at: _Point) -> _Point | None:
+        """One switching round, as in EMS: the posterior stays fixed, so a candidate wins by
+        explaining the current inliers better, not by reaching for other points.
+
+        Candidates are ranked by ``sum w d²`` as they stand; the ``switch_candidates`` best get
+        ``switch_iterations`` LM steps each, and the best of those replaces ``at`` if it lowers
+        ``sum w d²`` by more than the fraction ``switch_gain``.
+        """
+        w = self.weights * self.model.posterior(at.ev.d, at.sigma2)
+        current = float(w @ (at.ev.d * at.ev.d))
+        scored = []
+        for cand in self.candidates(at.state):
+            ev = evaluate(self.points_t, cand)
+            scored.append((float(w @ (ev.d * ev.d)), cand, ev))
+        scored.sort(key=lambda item: item[0])
+        best = None
+        for _, cand, ev in scored[: self.cfg.switch_candidates]:
+            state, ev, _, cost = self._m_step(cand, ev, w, _LAMBDA[0], self.cfg.switch_iterations)
+            self.iterations += 1
+            if best is None or cost < best[0]:
+                best = (cost, state, ev)
+        if best is None or best[0] > (1.0 - self.cfg.switch_gain) * current:
+            return None
+        _, state, ev = best
+        sigma2 = self._sigma2(ev, w, at.sigma2)
+        return _Point(state, ev, sigma2, self.model.nll(ev.d, sigma2, self.weights))
+
     # ------------------------------------------------------------------ driver
     def fit(self, init: SQState, sigma2: float, max_switches: int) -> EMSResult:
-        sigma2 = max(sigma2, self.sigma2_min)
-        state, sigma2, cost, r = self._run(init, sigma2, self.cfg.em_max_iterations)
+        """EM with up to ``max_switches`` switching rounds at stalls, then EM to convergence."""
+        at = self._at(init, max(sigma2, self.sigma2_min))
         switches = 0
-        while switches < max_switches and self.iterations < self.cfg.em_max_iterations * 4:
-            best = None
-            for cand in self.candidates(state):
-                c_state, c_sigma2, c_cost, c_r = self._run(cand, sigma2, self.cfg.switch_iterations)
-                if best is None or c_cost < best[2]:
-                    best = (c_state, c_sigma2, c_cost, c_r)
-            if best is None or best[2] > cost - self.cfg.em_tolerance:
-                break
-            switches += 1
-            state, sigma2, cost, r = self._run(best[0], best[1], self.cfg.em_max_iterations)
-            if cost > best[2]:
-                state, sigma2, cost, r = best
-        posterior = self.model.posterior(r, sigma2)
-        return EMSResult(state, posterior, float(np.sqrt(sigma2)), cost, self.iterations, switches)
+        for _ in range(max_switches):
+            at = self._run(at, self.cfg.em_max_iterations, self.cfg.switch_tolerance)
+            better = None if self.stopped else self._switch(at)
+            if better is not None:
+                at = better
+                switches += 1
+        if not self.stopped:
+            at = self._run(at, self.cfg.em_max_iterations, self.cfg.em_tolerance)
+        posterior = self.model.posterior(at.ev.d, at.sigma2)
+        return EMSResult(
+            at.state,
+            posterior,
+            float(np.sqrt(at.sigma2)),
+            at.cost,
+            self.iterations,
+            switches,
+            self.stopped,
+        )
 
 
 def ems_fit(
@@ -216,6 +286,7 @@ def ems_fit(
     scale_max_m: float,
     max_switches: int,
     cfg: RecoveryConfig,
+    stop: Callable[[Array], bool] | None = None,
 ) -> EMSResult:
     """Fit one superquadric to ``points`` (N, 3) by EMS from ``init``.
 
@@ -226,8 +297,9 @@ def ems_fit(
         model: outlier weight and workspace volume.
         sigma2_init: starting noise variance (m²).
         scale_max_m: upper bound on every semi-axis (m).
-        max_switches: how many times switching may replace the current solution.
+        max_switches: switching rounds.
         cfg: iteration counts, bounds and tolerances.
+        stop: called with the posterior before every E-step; True ends the run there.
     """
-    fitter = _Fitter(points, weights, model, scale_max_m, cfg)
+    fitter = _Fitter(points, weights, model, scale_max_m, cfg, stop)
     return fitter.fit(init, sigma2_init, max_switches)

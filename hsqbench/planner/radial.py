@@ -75,57 +75,106 @@ class SQState:
         )
 
 
-def _pair(u: Array, v: Array, t: float) -> tuple[Array, Array, Array, Array, Array]:
-    """Power mean of a pair and its pieces: value, share of u, share of v, d ln(value) / d t."""
+@dataclass
+class Evaluation:
+    """Scaled radial distances at a state, with what the Jacobian needs (all (3, N) or (N,)).
+
+    Points are held transposed, (3, N), so that each coordinate is a contiguous row.
+    """
+
+    d: Array
+    local: Array
+    n: Array
+    rho: Array
+    rad: Array
+    c: Array
+    c_over_n: Array
+    cos: Array
+    inner: tuple[Array, Array, Array]
+    outer: tuple[Array, Array, Array]
+    eps1: float
+    eps2: float
+
+
+def _pair(u: Array, v: Array, t: float) -> tuple[Array, Array, Array, tuple[Array, Array, Array]]:
+    """``phi(u, v, t)``, the shares of u and v, and ``(ln q, ln(1 + q^(1/t)), s_lo)`` for d/dt."""
+    hi = np.maximum(np.maximum(u, v), 1e-300)
+    lo = np.minimum(u, v)
+    with np.errstate(divide="ignore"):
+        log_q = np.log(lo / hi)
+    qt = np.exp(log_q / t)
+    log_1qt = np.log1p(qt)
+    value = hi * np.exp(t * log_1qt)
+    s_lo = qt / (1.0 + qt)
     u_hi = u >= v
-    hi = np.where(u_hi, u, v)
-    lo = np.where(u_hi, v, u)
-    q = lo / np.where(hi > 0.0, hi, 1.0)
-    qt = q ** (1.0 / t)
-    one_qt = 1.0 + qt
-    value = hi * one_qt**t
-    s_lo = qt / one_qt
-    s_hi = 1.0 - s_lo
-    s_u = np.where(u_hi, s_hi, s_lo)
-    s_v = np.where(u_hi, s_lo, s_hi)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s_lo_log_q = np.where(s_lo > 0.0, s_lo * np.log(q), 0.0)
-    dlog_dt = np.log(one_qt) - s_lo_log_q / t
-    return value, s_u, s_v, dlog_dt, q
+    s_u = np.where(u_hi, 1.0 - s_lo, s_lo)
+    return value, s_u, 1.0 - s_u, (log_q, log_1qt, s_lo)
+
+
+def _dlog_dt(pieces: tuple[Array, Array, Array], t: float) -> Array:
+    """``d ln phi / d t = ln(1 + q^(1/t)) - s_lo ln(q) / t`` (0 * ln 0 taken as 0)."""
+    log_q, log_1qt, s_lo = pieces
+    s_log_q = np.where(s_lo > 0.0, s_lo * np.where(s_lo > 0.0, log_q, 0.0), 0.0)
+    return log_1qt - s_log_q / t
+
+
+def evaluate(points_t: Array, state: SQState) -> Evaluation:
+    """Scaled signed radial distances ``d`` (N,), metres, of the points ``points_t`` (3, N)."""
+    local = state.rotation.T @ (points_t - state.translation[:, None])
+    rho = np.sqrt(np.einsum("ij,ij->j", local, local))
+    at_centre = rho < _RHO_MIN
+    n = local / np.where(at_centre, 1.0, rho)
+    if at_centre.any():
+        n[:, at_centre] = ((0.0,), (0.0,), (1.0,))
+    u = (n / state.scale[:, None]) ** 2
+    inner, s_x, s_y, inner_pieces = _pair(u[0], u[1], state.eps2)
+    g, s_p, s_z, outer_pieces = _pair(inner, u[2], state.eps1)
+    rad = 1.0 / np.sqrt(g)
+    c = np.stack([s_p * s_x, s_p * s_y, s_z])
+    c_over_n = np.divide(c, n, out=np.zeros_like(c), where=n != 0.0)
+    cos = 1.0 / np.sqrt(np.einsum("ij,ij->j", c_over_n, c_over_n))
+    return Evaluation(
+        d=(rho - rad) * cos,
+        local=local,
+        n=n,
+        rho=np.where(at_centre, 0.0, rho),
+        rad=rad,
+        c=c,
+        c_over_n=c_over_n,
+        cos=cos,
+        inner=(*inner_pieces[:2], inner_pieces[2]),
+        outer=outer_pieces,
+        eps1=state.eps1,
+        eps2=state.eps2,
+    )
+
+
+def jacobian(ev: Evaluation, rows: NDArray[np.int64] | None = None) -> Array:
+    """The (11, M) Jacobian of ``d`` at the points ``rows`` (all when None); see module doc."""
+    sel = slice(None) if rows is None else rows
+    rad, cos, rho = ev.rad[sel], ev.cos[sel], ev.rho[sel]
+    n, c, c_over_n, local = ev.n[:, sel], ev.c[:, sel], ev.c_over_n[:, sel], ev.local[:, sel]
+    inner = tuple(a[sel] for a in ev.inner)
+    outer = tuple(a[sel] for a in ev.outer)
+    s_p = c[0] + c[1]
+    half = 0.5 * rad * cos
+    jac = np.empty((11, rad.size))
+    jac[0] = half * _dlog_dt(outer, ev.eps1)
+    jac[1] = half * s_p * _dlog_dt(inner, ev.eps2)
+    jac[2:5] = -(rad * cos) * c
+    safe_rho = np.where(rho > 0.0, rho, np.inf)
+    grad = n - (rad / safe_rho) * (n - c_over_n)
+    jac[5:8] = np.cross(grad, local, axis=0) * cos
+    jac[8:11] = -grad * cos
+    return jac
 
 
 def radial_residual(
-    points: Array, state: SQState, jacobian: bool = False
+    points: Array, state: SQState, jacobian_too: bool = False
 ) -> tuple[Array, Array | None]:
-    """Scaled signed radial distances ``d`` (N,), metres, and the (N, 11) Jacobian when asked."""
-    local = (points - state.translation) @ state.rotation
-    rho = np.sqrt(np.einsum("ij,ij->i", local, local))
-    at_centre = rho < _RHO_MIN
-    safe_rho = np.where(at_centre, 1.0, rho)
-    n = local / safe_rho[:, None]
-    n[at_centre] = (0.0, 0.0, 1.0)
-    u = (n / state.scale) ** 2
-    inner, s_x, s_y, dlnp_de2, _ = _pair(u[:, 0], u[:, 1], state.eps2)
-    g, s_p, s_z, dlng_de1, _ = _pair(inner, u[:, 2], state.eps1)
-    rad = 1.0 / np.sqrt(g)
-    r = rho - rad
-    c = np.column_stack([s_p * s_x, s_p * s_y, s_z])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        c_over_n = np.where(n != 0.0, c / n, 0.0)
-    cos = 1.0 / np.sqrt(np.einsum("ij,ij->i", c_over_n, c_over_n))
-    if not jacobian:
-        return r * cos, None
-    half_rad = 0.5 * rad
-    jac = np.empty((len(points), 11))
-    jac[:, 0] = half_rad * dlng_de1
-    jac[:, 1] = half_rad * s_p * dlnp_de2
-    jac[:, 2:5] = -rad[:, None] * c
-    grad = n - (rad / safe_rho)[:, None] * (n - c_over_n)
-    grad[at_centre] = 0.0
-    jac[:, 5:8] = np.cross(grad, local)
-    jac[:, 8:11] = -grad
-    jac *= cos[:, None]
-    return r * cos, jac
+    """Scaled signed radial distances (N,) of points (N, 3), and the (N, 11) Jacobian if asked."""
+    ev = evaluate(np.ascontiguousarray(points.T), state)
+    return ev.d, (jacobian(ev).T if jacobian_too else None)
 
 
 def apply_increment(

@@ -19,6 +19,7 @@ to, so ``inliers`` and ``inlier_probability`` index the input array.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,7 +65,7 @@ class HiddenSuperquadric:
         inliers: int indices into the input cloud of the points Y this superquadric explains.
         alpha: the paper's goodness, mean distance from Y to an even sampling S of the surface, m.
         beta: the paper's coverage, fraction of S within ``coverage_distance_m`` of Y.
-        seed: index of the seed: 0..K-1 the K-means parts, K the whole cloud.
+        seed: index of the seed: 0 the whole cloud, 1.. the K-means parts.
         sigma_m: fitted noise std, metres.
         cost: final negative log-likelihood per voxel centroid, nats.
     """
@@ -143,10 +144,11 @@ def _fit(
     outlier_weight: float,
     max_switches: int,
     cfg: RecoveryConfig,
+    stop: Callable[[Array], bool] | None = None,
 ) -> EMSResult:
     """EMS from ``init``; the starting noise level is the rms distance of ``part`` to ``init``."""
-    r, _ = radial_residual(part, init)
-    sigma2 = float(np.mean(r * r)) / 3.0
+    d, _ = radial_residual(part, init)
+    sigma2 = float(np.mean(d * d)) / 3.0
     model = MixtureModel(outlier_weight, problem.volume_m3)
     return ems_fit(
         problem.points,
@@ -157,6 +159,7 @@ def _fit(
         problem.scale_max_m,
         max_switches,
         cfg,
+        stop,
     )
 
 
@@ -170,6 +173,25 @@ def _clipped(state: SQState, problem: _Problem, cfg: RecoveryConfig) -> SQState:
     )
 
 
+def _starts(ellipsoid: SQState, cfg: RecoveryConfig) -> list[SQState]:
+    """Multi-start for a whole-object fit: each axis of the inertia ellipsoid as the z axis,
+    with each of the shape exponents ``start_eps``."""
+    out = []
+    for shift in range(3):
+        perm = np.roll(np.arange(3), -shift)
+        for eps1, eps2 in cfg.start_eps:
+            out.append(
+                SQState(
+                    eps1,
+                    eps2,
+                    ellipsoid.scale[perm],
+                    ellipsoid.rotation[:, perm],
+                    ellipsoid.translation.copy(),
+                )
+            )
+    return out
+
+
 # ----------------------------------------------------------------------------- public API
 def fit_superquadric(
     points: ArrayLike,
@@ -178,9 +200,15 @@ def fit_superquadric(
 ) -> FitResult:
     """Fit one superquadric to a whole cloud by EMS (outlier weight ``config.outlier_weight``).
 
+    Without ``init``, EMS runs from several starts and the lowest cost wins: the ellipsoid with
+    half the cloud's inertia, each of its three axes taken as the z axis, times the shape
+    exponents ``config.start_eps``. Measured on 60 random superquadrics with 20 % outliers, one
+    start reaches 2 mm in 93 % of full views and 4 mm in 85 % of one-sided views; nine starts in
+    100 % and 95 %.
+
     Args:
         points: (N, 3) cloud, metres, world frame.
-        init: starting superquadric; default: the ellipsoid with half the cloud's inertia.
+        init: a single starting superquadric instead of the multi-start.
         config: recovery settings; default :class:`RecoveryConfig` (same as ``configs/planner.yaml``).
 
     Raises:
@@ -192,29 +220,49 @@ def fit_superquadric(
     down = _downsample(cloud, cfg)
     problem = _problem(down, cfg)
     if init is None:
-        state = inertia_ellipsoid(down.points, cfg.scale_min_m, problem.scale_max_m)
+        ellipsoid = inertia_ellipsoid(down.points, cfg.scale_min_m, problem.scale_max_m)
+        starts = _starts(ellipsoid, cfg)
     else:
-        state = _clipped(SQState.from_superquadric(init), problem, cfg)
-    res = _fit(problem, state, down.points, cfg.outlier_weight, cfg.max_switches, cfg)
+        starts = [_clipped(SQState.from_superquadric(init), problem, cfg)]
+    fits = [
+        _fit(problem, s, down.points, cfg.outlier_weight, cfg.max_switches, cfg) for s in starts
+    ]
+    best = min(fits, key=lambda f: f.cost)
     return FitResult(
-        superquadric=res.state.to_superquadric(),
-        inlier_probability=res.posterior[down.inverse],
-        sigma_m=res.sigma_m,
-        cost=res.cost,
-        iterations=res.iterations,
-        switches=res.switches,
+        superquadric=best.state.to_superquadric(),
+        inlier_probability=best.posterior[down.inverse],
+        sigma_m=best.sigma_m,
+        cost=best.cost,
+        iterations=sum(f.iterations for f in fits),
+        switches=best.switches,
     )
 
 
 def part_count(cloud: Array, cfg: RecoveryConfig) -> int:
-    """K for a cloud: the paper's rule on the number of ``k_count_voxel_m`` voxels it occupies.
+    """K of the paper for a cloud: its rule on the number of ``k_count_voxel_m`` voxels occupied.
 
-    The paper counts the raw fused cloud of two Azure Kinects, whose pixels cover about 2 mm of
-    surface at the table's distance. Counting occupied voxels of that size asks how many points
-    the paper's sensors would have returned, whatever the density of our cloud; K is capped at
-    ``max_parts``.
+    The paper counts the raw fused cloud of two Azure Kinects, whose pixels cover about 2 mm at
+    the table's distance (the harness's perception delivers such a cloud, voxelised at 2 mm).
+    Counting occupied voxels of that size asks how many points those sensors would have
+    returned, whatever the density of the cloud given.
     """
-    return min(paper_k(count_voxels(cloud, cfg.k_count_voxel_m)), cfg.max_parts)
+    return paper_k(count_voxels(cloud, cfg.k_count_voxel_m))
+
+
+def _duplicate_test(
+    done: list[NDArray[np.bool_]], threshold: float, min_iou: float
+) -> Callable[[Array], bool]:
+    """True when the inliers of a running fit overlap those of a finished one by ``min_iou``."""
+
+    def test(posterior: Array) -> bool:
+        mask = posterior > threshold
+        for other in done:
+            union = np.count_nonzero(mask | other)
+            if union and np.count_nonzero(mask & other) >= min_iou * union:
+                return True
+        return False
+
+    return test
 
 
 def recover_hidden_superquadrics(
@@ -222,15 +270,25 @@ def recover_hidden_superquadrics(
     config: RecoveryConfig | None = None,
     seed: int | None = None,
 ) -> list[HiddenSuperquadric]:
-    """The paper's stage one: K + 1 hidden superquadrics of a cloud.
+    """Stage one of the paper: hidden superquadrics of a cloud, from K-means seeds.
 
-    K-means (seeded with ``seed``) splits the downsampled cloud into K parts (:func:`part_count`).
-    Each part, and the whole cloud as seed K, starts an ellipsoid with half its inertia, and EMS
-    with the high outlier weight ``hidden_outlier_weight`` lets it grow into a local part. The
-    inliers Y of a result are the input points whose voxel posterior exceeds
-    ``inlier_threshold``; alpha and beta are computed on Y. A fit that ends with fewer than
-    ``N_PARAMS`` inliers describes no part of the cloud and is left out, so at most K + 1 results
-    come back, in seed order.
+    Seeds: seed 0 is the whole cloud; seeds 1..M are the parts of a K-means split of the
+    downsampled cloud (``seed`` seeds K-means), with ``M = round(kmeans_parts_factor * K)`` (at most
+    ``max_parts``) and K the paper's rule (:func:`part_count`). Each seed starts as the ellipsoid with half its
+    inertia, and EMS with the high outlier weight ``hidden_outlier_weight`` lets it grow into a
+    local part.
+
+    Two departures from the paper, both measured on the union shapes of the tests (2 parts
+    each, 12 random poses each of three shapes): with the paper's K (factor 1), K-means parts
+    straddle a mug's handle and its wall and their seeds grow into the wall, and the handle was
+    found in 8 of 12 poses; with twice as many parts in 12 of 12 (all 72 parts). Seeds are
+    fitted in order, and a fit whose inliers come to overlap those of an earlier result by
+    ``duplicate_iou`` (intersection over union) is stopped and left out: it would end as a copy
+    of that result (same grasps, same scores), and stopping it early pays for the extra seeds.
+
+    The inliers Y of a result are the input points whose voxel posterior exceeds
+    ``inlier_threshold``; alpha and beta are computed on Y at ``surface_spacing_m`` and
+    ``coverage_distance_m``. A fit with fewer than ``N_PARAMS`` inliers is left out as well.
 
     Args:
         points: (N, 3) cloud, metres.
@@ -245,16 +303,22 @@ def recover_hidden_superquadrics(
     down = _downsample(cloud, cfg)
     problem = _problem(down, cfg)
     k = part_count(cloud, cfg)
-    labels = kmeans_labels(down.points, k, 0 if seed is None else seed, cfg.kmeans_n_init)
-    parts = [down.points[labels == i] for i in range(int(labels.max()) + 1)]
-    parts.append(down.points)
+    n_parts = min(max(1, round(cfg.kmeans_parts_factor * k)), cfg.max_parts)
+    labels = kmeans_labels(down.points, n_parts, 0 if seed is None else seed, cfg.kmeans_n_init)
+    parts = [down.points] + [down.points[labels == i] for i in range(int(labels.max()) + 1)]
+    done: list[NDArray[np.bool_]] = []
+    stop = _duplicate_test(done, cfg.inlier_threshold, cfg.duplicate_iou)
     results = []
     for index, part in enumerate(parts):
         init = inertia_ellipsoid(part, cfg.scale_min_m, problem.scale_max_m)
-        res = _fit(problem, init, part, cfg.hidden_outlier_weight, cfg.hidden_max_switches, cfg)
-        inliers = np.flatnonzero(res.posterior[down.inverse] > cfg.inlier_threshold)
-        if inliers.size < N_PARAMS:
+        res = _fit(
+            problem, init, part, cfg.hidden_outlier_weight, cfg.hidden_max_switches, cfg, stop
+        )
+        inlier_voxels = res.posterior > cfg.inlier_threshold
+        inliers = np.flatnonzero(inlier_voxels[down.inverse])
+        if res.stopped or inliers.size < N_PARAMS:
             continue
+        done.append(inlier_voxels)
         sq = res.state.to_superquadric()
         alpha, beta = alpha_beta(cloud[inliers], sq, cfg.surface_spacing_m, cfg.coverage_distance_m)
         results.append(HiddenSuperquadric(sq, inliers, alpha, beta, index, res.sigma_m, res.cost))
