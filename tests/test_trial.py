@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import replace
+from itertools import pairwise
 
 import mujoco
 import numpy as np
@@ -283,3 +284,21 @@ def test_cli_rejects_unknown_names(capsys):
     assert "unknown planner" in err and "hsq" in err
     assert main(["trial", "--scene", "packed", "--objects", "proc_box", "nope"]) == 2
     assert "nope" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_packed_round_with_hsq_follows_the_rules_and_is_deterministic(config):
+    objects = ["proc_box", "proc_cylinder", "proc_sphere"]
+    first = run_packed_round(objects, 7, "hsq", config)
+    assert first.objects == objects and first.objects_presented == 3
+    assert set(first.objects_cleared) <= set(objects)
+    successes = [a for a in first.attempts if a.success]
+    assert {a.target for a in successes} <= set(first.objects_cleared)
+    outcomes = [a.success for a in first.attempts]
+    cleared_all = len(first.objects_cleared) == 3
+    two_failures = len(outcomes) >= 2 and not any(outcomes[-2:])
+    assert cleared_all or two_failures or len(outcomes) == config.packed.max_attempts
+    # No two failures in a row before the end of the round.
+    assert not any(not a and not b for a, b in pairwise(outcomes[:-1]))
+    again = run_packed_round(objects, 7, "hsq", config)
+    assert _timeless(again) == _timeless(first)

@@ -265,8 +265,8 @@ class ArmIK:
         # Bodies rigid with the TCP: where they are follows from the target pose alone.
         link7 = model.body(panda.prefix + "link7").id
         self._rigid = np.array([panda.hand_body_id, *panda.finger_body_ids, link7])
-        rigid_geom = np.isin(model.geom_bodyid[self.robot_geoms], self._rigid)
-        self._required = np.where(rigid_geom, config.clearance_m, config.link_clearance_m)
+        self._rigid_geom = np.isin(model.geom_bodyid[self.robot_geoms], self._rigid)
+        self._required = np.where(self._rigid_geom, config.clearance_m, config.link_clearance_m)
         links = self.robot_geoms[~np.isin(model.geom_bodyid[self.robot_geoms], self._rigid)]
         if len(links) and len(self.obstacle_geoms) and config.link_clearance_m > 0:
             # Keeps the elbow and forearm off the table while iterating (the hand's own
@@ -333,6 +333,19 @@ class ArmIK:
             if margin < best[0]:
                 best = (float(margin), int(g[i]), float(dist))
         return best
+
+    def hand_margin(self, arm_q: ArrayLike) -> float:
+        """:meth:`clearance` margin of the hand, fingers and link7 alone, metres (their place
+        follows from the TCP pose, so a deficit is fixed by moving the target, not the arm)."""
+        self.configuration.update(self._full_q(np.asarray(arm_q, dtype=float)))
+        worst = 0.05
+        for i in np.flatnonzero(self._rigid_geom):
+            for o in self.obstacle_geoms:
+                dist = mujoco.mj_geomDistance(
+                    self.model, self.data, int(self.robot_geoms[i]), int(o), 0.05, None
+                )
+                worst = min(worst, dist - self._required[i])
+        return float(worst)
 
     def _obstacle_boxes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """World axis-aligned boxes (lo, hi), each (n_obstacles, 3), of the (static) obstacles."""

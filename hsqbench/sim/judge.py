@@ -190,11 +190,20 @@ class SceneProbe:
         """(n_objects, 3) centres of mass."""
         return data.xipos[self.body_ids].copy()
 
-    def in_tcp_frame(self, data: mujoco.MjData, name: str) -> NDArray[np.float64]:
-        """The object's centre of mass in the TCP frame, metres."""
-        sid = self.panda.tcp_site_id
-        r = data.site_xmat[sid].reshape(3, 3)
-        return r.T @ (data.xipos[self.object_bodies[name]] - data.site_xpos[sid])
+    def tcp_in_object(self, data: mujoco.MjData, name: str) -> NDArray[np.float64]:
+        """The TCP (grasp centre) in the object's body frame, metres: the material point of the
+        object held between the pads."""
+        b = self.object_bodies[name]
+        r = data.xmat[b].reshape(3, 3)
+        return r.T @ (data.site_xpos[self.panda.tcp_site_id] - data.xpos[b])
+
+    def slip(self, data: mujoco.MjData, name: str, point: NDArray[np.float64]) -> float:
+        """How far the object's material ``point`` (body frame, e.g. from :meth:`tcp_in_object`
+        at the grasp) is from the TCP now, metres: translation in the hand, not the swing of a
+        long object pivoting between the pads."""
+        b = self.object_bodies[name]
+        world = data.xpos[b] + data.xmat[b].reshape(3, 3) @ point
+        return float(np.linalg.norm(world - data.site_xpos[self.panda.tcp_site_id]))
 
     def lowest_z(self, data: mujoco.MjData, name: str) -> float:
         """Lowest world z of the object's collision geoms' bounding boxes, metres."""

@@ -80,6 +80,9 @@ from hsqbench.sim.surface_sensor import SurfaceSensor, SurfaceSensorConfig
 #: Where removed objects are parked (metres; far outside the table, cameras and arm).
 PARK_X_M, PARK_Y_M = 10.0, 10.0
 
+#: Added to a table nudge so the raised grasp clears the required distance, metres.
+NUDGE_EXTRA_M = 0.0005
+
 #: Name of the joint-space move to the first pose in reasons.
 MOVE_IN = "move to the first pose"
 
@@ -104,6 +107,8 @@ class ExecutionConfig:
         hover_clearance_m: gap between the hand's lowest point and the cloud's top at the hover
             pose (straight above a pre-grasp that is lower than that).
         waypoint_spacing_m: IK waypoint spacing on the descent from the hover pose.
+        table_nudge_max_m: a grasp whose fingers would come closer to the table than the IK
+            clearance by at most this much is raised by the deficit.
         hover_raise_m: how much higher the hover pose goes when the joint-space move to the
             lower one would swing the arm through the objects.
         cloud_voxel_m: the cloud is thinned to this voxel size for the arm's collision checks.
@@ -122,6 +127,7 @@ class ExecutionConfig:
     lift_segments: int = 4
     hover_clearance_m: float = 0.03
     waypoint_spacing_m: float = 0.05
+    table_nudge_max_m: float = 0.005
     hover_raise_m: float = 0.15
     cloud_voxel_m: float = 0.01
     cloud_clearance_m: float = 0.01
@@ -482,6 +488,13 @@ def plan_motion(
     for p, flipped in ((pose, False), (pose.flipped(), True)):
         label = "flipped" if flipped else "as planned"
         at_grasp = ik.solve(p, q_now, rng, closest_to=q_now)
+        if not at_grasp.ok and at_grasp.position_error_m <= env.config.ik.position_tolerance_m:
+            # Reached, but the fingers touch the table: the planner's gripper model and the
+            # hand's meshes differ by a few millimetres; raise the grasp that little.
+            deficit = -ik.hand_margin(at_grasp.q)
+            if 0 < deficit <= env.config.execution.table_nudge_max_m:
+                p = p.moved([0.0, 0.0, deficit + NUDGE_EXTRA_M])
+                at_grasp = ik.solve(p, q_now, rng, closest_to=q_now)
         if not at_grasp.ok:
             reasons.append(f"{label}: grasp pose {at_grasp.reason}")
             continue
@@ -602,12 +615,13 @@ class ExecutionResult:
 
 
 class _Hold:
-    """Watches that an object stays in the hand (both fingers, no slip)."""
+    """Watches that an object stays in the hand: touching both fingers, and the point of it
+    that was between the pads when the hand closed still there (it may pivot about it)."""
 
     def __init__(self, env: TrialEnv, name: str) -> None:
         self.env, self.name = env, name
         self.k = env.probe.names.index(name)
-        self.rel0 = env.probe.in_tcp_frame(env.data, name)
+        self.point = env.probe.tcp_in_object(env.data, name)
         self.z0 = float(env.probe.position(env.data, name)[2])
         self.max_rise = 0.0
         self.out_since: float | None = None
@@ -623,7 +637,7 @@ class _Hold:
         if self.out_since is not None and d.time - self.out_since >= j.lost_time_s:
             side = "left" if not touching[0] else "right"
             return f"{self.name} left the {side} finger"
-        slip = float(np.linalg.norm(env.probe.in_tcp_frame(d, self.name) - self.rel0))
+        slip = env.probe.slip(d, self.name, self.point)
         if slip > j.slip_distance_m:
             return f"{self.name} slipped {slip * 100:.1f} cm in the hand"
         return None
