@@ -6,16 +6,19 @@ One attempt (:func:`run_attempt`):
    fast :mod:`hsqbench.sim.surface_sensor` stand-in), with the arm at home, out of view.
 2. **Plan** with the planner (``PlanningContext``: table plane, ``packed``, seed, cameras,
    workspace). No grasp: ``no_grasp_found``.
-3. **Motion plan** the grasps in score order (equal scores, such as the rolls of one closing
-   line, with the most easily reached approach first), up to ``max_ranks``: for each, of the grasp and its
-   twin rotated by pi about the approach axis (the same parallel-jaw grasp) the one nearer the
-   home hand orientation is tried first, then the other. A grasp is executable when IK
-   (:mod:`hsqbench.sim.ik`) solves its pre-grasp (``pregrasp_distance_m`` back along the approach
-   axis, with random restarts), every waypoint of the straight approach and of the vertical
-   lift, and the carry pose above the bin. None executable: ``unreachable``.
-4. **Execute** (:mod:`hsqbench.sim.motion`): joint-space move to the pre-grasp; straight approach;
-   close with the 70 N hand; lift; carry (mostly a turn of the base joint) above the bin; lower;
-   open. Judged on the way (:mod:`hsqbench.sim.judge`):
+3. **Motion plan** (IK, :mod:`hsqbench.sim.ik`) the grasps in score order, equal scores (the
+   rolls of one closing line) with the most easily reached approach first, up to ``max_ranks``
+   distinct grasps. For each grasp and its twin turned by pi about the approach axis (the same
+   parallel-jaw grasp): solve the grasp pose (restarts; branches nearest the current posture
+   first), then outward from it the straight approach line back to the pre-grasp
+   (``pregrasp_distance_m`` along the approach axis), the vertical line up to a hover pose when
+   the pre-grasp is low (so the joint-space move ends above the objects), the vertical lift and
+   the carry pose above the bin. The motion must keep the arm off the table and bin all along
+   and, on the way in, out of the perceived cloud. Of the twins the one with the shorter
+   joint-space move is executed. None executable: ``unreachable``.
+4. **Execute** (:mod:`hsqbench.sim.motion`): joint-space move to the hover pose or pre-grasp;
+   vertical descent; straight approach; close with the 70 N hand; lift; carry (mostly a turn of
+   the base joint) above the bin; lower; open. Judged on the way (:mod:`hsqbench.sim.judge`):
 
    - ``collision_on_approach``: before the fingers close, the robot presses the table or bin
      (``table_contact_force_n``), or pushes an object (``object_contact_force_n``) farther than
@@ -24,8 +27,8 @@ One attempt (:func:`run_attempt`):
      touches both fingers; or the object is lost during the lift before it rose
      ``lifted_height_m``.
    - ``dropped``: the object was lifted, then left a finger for ``lost_time_s`` or slipped
-     ``slip_distance_m`` in the hand before the release; or it was released but did not come to
-     rest inside the bin.
+     ``slip_distance_m`` in the hand (at the point held between the pads) before the release;
+     or it was released but did not come to rest inside the bin.
    - ``success``: held from the lift to the release, and at rest inside the bin afterwards (the
      paper: "grasps the object and moves it from the workspace to a bin next to the arm without
      dropping it").
@@ -41,10 +44,11 @@ planner seed, IK restarts, each from its own ``SeedSequence`` stream) and MuJoCo
 so the same seed and config give the same outcomes and numbers (timings aside).
 
 Where the runner uses simulator truth rather than what the robot perceives: the judge (as any
-simulated benchmark); the lift height (objects start on the table, so it is whatever brings
-their bottom above the bin walls); and, after the lift, the held object's position and lowest
-point, used to centre it over the bin and lower it before release (a real robot would use a
-conservative fixed height instead).
+simulated benchmark) and the names in the records (``target``: the object held, or nearest the
+grasp); and, after the lift, the held object's position and lowest point, used to centre it over
+the bin and lower it before release (a real robot would use a conservative fixed height). The
+lift height is not: objects start on the table, so the lift that brings their bottom over the
+bin walls follows from the table and bin alone.
 """
 
 from __future__ import annotations
