@@ -34,6 +34,9 @@ from scipy.interpolate import PchipInterpolator
 from hsqbench.sim.recorder import NullRecorder, Recorder
 from hsqbench.sim.robot import Panda
 
+#: Time samples per waypoint segment when finding a trajectory's peak velocity and acceleration.
+DURATION_SAMPLES_PER_SEGMENT = 200
+
 #: MuJoCo warnings raised when it meets NaN/inf or huge values and resets the state.
 _BAD_STATE_WARNINGS = (
     mujoco.mjtWarning.mjWARN_BADQPOS,
@@ -162,24 +165,15 @@ class JointTrajectory:
 def joint_move_duration(waypoints: NDArray[np.float64], cfg: MotionConfig) -> float:
     """Shortest minimum-jerk duration through ``waypoints`` within the joint limits of ``cfg``.
 
-    With the path ``q(u)``, ``u = (K - 1) s(t / T)``: ``dq/dt = q'(u) du/dt`` and
-    ``d2q/dt2 = q''(u) (du/dt)^2 + q'(u) d2u/dt2``, whose peaks are bounded by
-    ``|q'|max (K-1) 1.875 / T`` and ``(|q''|max (K-1)^2 1.875^2 + |q'|max (K-1) 5.77) / T^2``
-    (per joint, derivatives of the interpolant sampled densely)."""
+    Velocities of a trajectory scale as ``1 / T`` and accelerations as ``1 / T^2``: the peaks
+    ``v1``, ``a1`` of each joint over the trajectory with ``T = 1`` (sampled densely, with
+    accelerations by finite differences) give ``T = max(v1 / v_max, sqrt(a1 / a_max))``."""
     w = np.asarray(waypoints, dtype=float)
-    n = len(w) - 1
-    if n == 1:
-        d1, d2 = np.abs(w[1] - w[0]), np.zeros(7)
-    else:
-        spline = PchipInterpolator(np.arange(len(w)), w)
-        u = np.linspace(0.0, n, 40 * n + 1)
-        d1 = np.abs(spline(u, 1)).max(axis=0)
-        d2 = np.abs(spline(u, 2)).max(axis=0)
-    v, acc = cfg.joint_velocity_limit, cfg.joint_acceleration_limit
-    t_v = MIN_JERK_PEAK_VELOCITY * n * d1 / v
-    t_a = np.sqrt(
-        (d2 * (n * MIN_JERK_PEAK_VELOCITY) ** 2 + d1 * n * MIN_JERK_PEAK_ACCELERATION) / acc
-    )
+    t = np.linspace(0.0, 1.0, DURATION_SAMPLES_PER_SEGMENT * (len(w) - 1) + 1)
+    _, dq = JointTrajectory(w, 1.0).sample(t)
+    ddq = np.gradient(dq, t, axis=0)
+    t_v = np.abs(dq).max(axis=0) / cfg.joint_velocity_limit
+    t_a = np.sqrt(np.abs(ddq).max(axis=0) / cfg.joint_acceleration_limit)
     return float(max(cfg.min_move_time_s, t_v.max(), t_a.max()))
 
 
