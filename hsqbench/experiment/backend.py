@@ -11,6 +11,7 @@ picklable (it is sent to worker processes) and deterministic for a given trial s
 
 from __future__ import annotations
 
+import importlib
 import os
 import socket
 import time
@@ -144,8 +145,10 @@ class SimBackend:
 
     @staticmethod
     def _module() -> Any:
+        # import_module consults sys.modules first; `from hsqbench.sim import trial` would return
+        # the package attribute even when the module entry has been replaced or removed.
         try:
-            from hsqbench.sim import trial
+            trial = importlib.import_module("hsqbench.sim.trial")
         except ImportError as exc:
             raise TrialRunnerUnavailable(
                 "the simulation trial runner (hsqbench.sim.trial) is not available "
