@@ -53,7 +53,7 @@ assets: $(STAMP)
 RUN ?= paper
 benchmark: $(STAMP) assets
 	$(PY) -m hsqbench.cli benchmark --config paper --run $(RUN) --jobs $(JOBS) --resume
-	@rm -rf results/latest && cp -r results/$(RUN) results/latest && rm -f results/latest/*.lock
+	@rm -rf results/latest && cp -r results/$(RUN) results/latest && rm -f results/latest/.lock
 	@echo "tables: results/latest/tables.md (copied from results/$(RUN))"
 
 clean:

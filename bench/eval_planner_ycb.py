@@ -51,7 +51,7 @@ from hsqbench.settings import cache_dir  # noqa: E402
 #: Spacing of the ground-truth mesh samples, metres (the fused cloud's 2 mm voxel).
 GT_SPACING_M = 0.002
 #: Part of the cache key: bump when the cached content changes.
-CACHE_VERSION = 2
+CACHE_VERSION = 3
 
 
 def mesh_samples(model, data, body_id: int, rng: np.random.Generator):
@@ -118,6 +118,7 @@ def observe(
         "support_plane": np.asarray(info.support_plane, float),
         "truth": truth,
         "truth_normals": normals,
+        "camera_positions": obs.camera_positions,
     }
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, **out)
@@ -177,7 +178,13 @@ def main() -> int:
             if not rows:  # warm-up: imports and config parsing stay out of the first time
                 plan_grasps(obs["points"][:500], args.config, support_plane=plane, seed=seed)
             start = time.process_time()
-            res = plan_grasps(obs["points"], args.config, support_plane=plane, seed=seed)
+            res = plan_grasps(
+                obs["points"],
+                args.config,
+                support_plane=plane,
+                seed=seed,
+                camera_positions=obs["camera_positions"],
+            )
             cpu = time.process_time() - start
             best = res.best
             if best is not None:

@@ -93,9 +93,16 @@ def test_lines_the_table_does_not_block_are_untouched():
 
 
 def test_steep_lines_are_not_levelled():
-    # The bar's long axis tilted 30 deg: beyond max_tilt_deg, its lines are left to the rules.
-    rot = Rotation.from_euler("y", 30.0, degrees=True).as_matrix()
-    sq = Superquadric(0.5, 1.0, [0.012, 0.012, 0.03], rot, [0.5, 0.0, 0.012])
-    cands, idx, _ = repaired(sq)
-    steep = np.abs(cands.lines.directions @ TABLE[:3]) > np.sin(np.deg2rad(CONFIG.max_tilt_deg))
-    assert not np.any(np.isin(idx, np.flatnonzero(steep)))
+    # A box standing on a corner edge, tilted 60 deg: its lines are 60 and 30 deg from the table.
+    rot = Rotation.from_euler("y", 60.0, degrees=True).as_matrix()
+    sq = Superquadric(0.1, 0.1, [0.012, 0.012, 0.012], rot, [0.5, 0.0, 0.008])
+    cands = synthesize([sq], CONFIG)
+    before = np.abs(cands.lines.directions @ TABLE[:3])
+    idx = level_table_lines(cands, [sq], TABLE, GRIPPER, CONFIG)
+    limit = np.sin(np.deg2rad(CONFIG.level_max_angle_deg))
+    assert np.any(before > limit) and np.any((before <= limit) & (before > 0.1))
+    assert not np.any(np.isin(idx, np.flatnonzero(before > limit)))
+    # The line 30 deg from the table is tried, but levelled it meets the box's faces 30 deg off
+    # their normals (more than max_tilt_deg): not antipodal, not repaired.
+    tried = np.flatnonzero((before <= limit) & (before > 0.1))
+    assert not np.any(np.isin(idx, tried))

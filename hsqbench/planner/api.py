@@ -56,6 +56,18 @@ def validate_cloud(points: ArrayLike) -> NDArray[np.float64]:
     return cloud
 
 
+def validate_cameras(cameras: ArrayLike | None) -> NDArray[np.float64] | None:
+    """Camera centres as (C, 3) float64, or a ValueError naming the problem."""
+    if cameras is None:
+        return None
+    arr = np.asarray(cameras, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] == 0 or not np.all(np.isfinite(arr)):
+        raise ValueError(
+            f"camera_positions must be a (C, 3) array of finite metres, got shape {arr.shape}"
+        )
+    return arr
+
+
 def validate_plane(plane: ArrayLike | None) -> NDArray[np.float64] | None:
     """``(a, b, c, d)`` scaled so that ``(a, b, c)`` is a unit normal; ValueError if impossible."""
     if plane is None:
@@ -77,8 +89,8 @@ class PlanningContext:
         support_plane: the table ``(a, b, c, d)`` (unit normal toward the free side), or None.
         packed: several objects in the cloud (the paper then drops ``h_delta``).
         seed: for any randomness in the planner; None means the planner's default.
-        camera_positions: (C, 3) camera centres, world metres, if known (the hsq planner ignores
-            them; view-aware planners may use them).
+        camera_positions: (C, 3) camera centres, world metres, if known (the hsq planner waives
+            the support test at contacts none of them can see).
         workspace_bounds: ``(lower (3,), upper (3,))`` corners of the workspace box, metres, if
             known (ignored by the hsq planner).
     """
@@ -226,6 +238,7 @@ def plan_from_hidden(
     packed: bool = False,
     support_plane: ArrayLike | None = None,
     seed: int | None = None,
+    camera_positions: ArrayLike | None = None,
 ) -> PlanResult:
     """Stage two on given hidden superquadrics: synthesis, elimination, scoring, ranking.
 
@@ -239,8 +252,11 @@ def plan_from_hidden(
         support_plane: the table, ``(a, b, c, d)``; None: no table test. Lines the table
             blocks are levelled and lifted first (:mod:`hsqbench.planner.table_lines`).
         seed: for the subset used to estimate the cloud's spacing (None = 0).
+        camera_positions: (C, 3) camera centres, metres; with them, contacts no camera can see
+            need no support (``grasp.unseen_incidence_deg``). None: every contact needs it.
     """
     cloud = validate_cloud(points)
+    cameras = validate_cameras(camera_positions)
     cfg = config if config is not None else resolve_config(None).grasp
     grip = gripper if gripper is not None else resolve_gripper(cfg.gripper)
     plane = validate_plane(support_plane)
@@ -258,7 +274,9 @@ def plan_from_hidden(
     betas = np.array([h.beta for h in hidden], dtype=np.float64)
     h_alpha, h_beta = fit_factors(alphas, betas, cfg)
     priority = (h_alpha * h_beta)[cands.lines.source]
-    report = eliminate(cands, cloud, grip, cfg, plane, 0 if seed is None else seed, priority)
+    report = eliminate(
+        cands, cloud, grip, cfg, plane, 0 if seed is None else seed, priority, cameras
+    )
     timings["elimination"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -286,6 +304,7 @@ def plan_grasps(
     support_plane: ArrayLike | None = None,
     seed: int | None = None,
     gripper: GripperModel | None = None,
+    camera_positions: ArrayLike | None = None,
 ) -> PlanResult:
     """The paper's planner: hidden superquadrics (stage one), then ranked grasps (stage two).
 
@@ -300,6 +319,8 @@ def plan_grasps(
         support_plane: the table ``(a, b, c, d)``, unit normal toward the free side.
         seed: stage one's K-means seed (None = 0: deterministic by default).
         gripper: default: the gripper named in the config.
+        camera_positions: (C, 3) camera centres, metres, if known: contacts no camera can see
+            then need no support (see :func:`plan_from_hidden`).
 
     Raises:
         ValueError: an empty, non-finite or badly shaped cloud; a bad plane or config.
@@ -335,6 +356,7 @@ def plan_grasps(
         packed=packed,
         support_plane=support_plane,
         seed=seed,
+        camera_positions=camera_positions,
     )
     result.n_removed = raw.shape[0] - cloud.shape[0]
     result.timings = {"cleaning": t_cleaning, "recovery": t_recovery, **result.timings}
@@ -365,4 +387,5 @@ class HSQPlanner:
             support_plane=context.support_plane,
             seed=context.seed,
             gripper=self.gripper,
+            camera_positions=context.camera_positions,
         )

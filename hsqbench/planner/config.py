@@ -101,6 +101,7 @@ class GraspConfig:
     round_axis_ratio_tol: float = 0.1
     max_tilt_deg: float = 15.0
     level_table_lines: bool = True
+    level_max_angle_deg: float = 45.0
     # Elimination.
     duplicate_distance_m: float = 0.003
     duplicate_angle_deg: float = 3.0
@@ -111,6 +112,7 @@ class GraspConfig:
     support_min_points: int = 5
     support_min_fraction: float = 0.1
     support_max_tilt_deg: float = 30.0
+    unseen_incidence_deg: float = 75.0
     approach_distance_m: float = 0.05
     table_clearance_m: float = 0.003
     # Scoring.
@@ -148,10 +150,12 @@ class GraspConfig:
             "round_eps2_tol": self.round_eps2_tol,
             "round_axis_ratio_tol": self.round_axis_ratio_tol,
             "max_tilt_deg": self.max_tilt_deg,
+            "level_max_angle_deg": self.level_max_angle_deg,
             "opening_margin_m": self.opening_margin_m,
             "support_min_points": self.support_min_points,
             "support_min_fraction": self.support_min_fraction,
             "support_max_tilt_deg": self.support_max_tilt_deg,
+            "unseen_incidence_deg": self.unseen_incidence_deg,
             "approach_distance_m": self.approach_distance_m,
             "table_clearance_m": self.table_clearance_m,
         }

@@ -21,6 +21,11 @@ that removed it (``CandidateSet.rejected_by``):
    finger can push on, i.e. the normal of the plane fitted to them must be within
    ``support_max_tilt_deg`` of the line. This removes lines whose contact is an edge of the
    object (e.g. a superquadric fitted to one face of a box, gripped across that face's length).
+   Addition, when the cameras' positions are known: a contact that no camera can see (its
+   modelled normal more than ``unseen_incidence_deg`` from the direction to every camera, e.g.
+   the face of an object toward the robot, which neither side camera sees) cannot show support,
+   so it is not asked to; the other contact must show it. Without this, every line needing that
+   face goes, whatever the object.
 The gripper approaches open to ``min(l_w, 2 h + 2 contact_depth_m)`` (``approach_openings``,
 kept as ``ClosingLines.openings`` and ``Grasp.approach_width``): its fingers then clear the contact
 surface (noise and fit error included) and close only through it, so the open fingers are the
@@ -49,7 +54,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from hsqbench.planner.candidates import (
@@ -195,6 +200,26 @@ def support_stats(
             _, vectors = np.linalg.eigh(cov)
             cos_tilt[sl, side] = np.where(count >= 3, np.abs(vectors[:, 0, 0]), 0.0)
     return SupportStats(counts, cos_tilt)
+
+
+def unobservable_contacts(
+    cands: CandidateSet, lines: NDArray[np.int64], cameras: ArrayLike, config: GraspConfig
+) -> NDArray[np.bool_]:
+    """(len(lines), 2): whether the ``+d`` / ``-d`` contact of each line faces away from every
+    camera, i.e. its modelled normal (``+d`` / ``-d``) is more than ``unseen_incidence_deg``
+    from the direction to each camera. Occlusion by other surfaces is not modelled: a contact
+    facing a camera counts as observable even if something hides it (the strict choice)."""
+    L = cands.lines
+    cams = np.asarray(cameras, dtype=np.float64).reshape(-1, 3)
+    cos_max = np.cos(np.deg2rad(config.unseen_incidence_deg))
+    out = np.empty((lines.size, 2), dtype=bool)
+    for side, sign in enumerate((1.0, -1.0)):
+        normal = sign * L.directions[lines]
+        contact = L.centres[lines] + L.half_lengths[lines, None] * normal
+        to_cam = cams[None, :, :] - contact[:, None, :]
+        cos = np.einsum("lj,lkj->lk", normal, to_cam) / np.linalg.norm(to_cam, axis=2)
+        out[:, side] = np.all(cos < cos_max, axis=1)
+    return out
 
 
 def duplicate_lines(
@@ -399,11 +424,13 @@ def eliminate(
     support_plane: NDArray | None = None,
     seed: int = 0,
     line_priority: NDArray | None = None,
+    camera_positions: NDArray | None = None,
 ) -> EliminationReport:
     """Run the rules on ``cands`` in place (fills ``rejected_by``); returns the counts.
 
     ``line_priority`` (L,) decides which of duplicate lines stays (higher wins; default: the
     first); the planner passes ``h_alpha h_beta`` of each line's superquadric.
+    ``camera_positions`` (C, 3): with them, a contact no camera can see needs no support (rule 2).
     """
     n_roll = cands.n_roll
     L = cands.lines
@@ -435,7 +462,13 @@ def eliminate(
     lines = alive_lines()
     stats = support_stats(points, cands, lines, config)
     facing = stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
-    apply("support", lines, np.any((stats.counts < kappa) | ~facing, axis=1))
+    supported = (stats.counts >= kappa) & facing
+    if camera_positions is not None:
+        unseen = unobservable_contacts(cands, lines, camera_positions, config)
+        ok = np.all(supported | unseen, axis=1) & np.any(supported, axis=1)
+    else:
+        ok = np.all(supported, axis=1)
+    apply("support", lines, ~ok)
 
     openings = approach_openings(L.half_lengths, gripper, config)
     L.openings = openings

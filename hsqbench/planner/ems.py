@@ -8,10 +8,11 @@ Gibbs sampler of Wu et al. (ECCV 2022); we use EM, its deterministic counterpart
 
 - E-step: inlier posterior ``p_i = 1 / (1 + k exp(d_i² / 2 sigma²))`` with
   ``k = w_o (1/V) / ((1 - w_o) (2 pi sigma²)^(-3/2))``.
-- M-step: ``lm_steps`` Levenberg-Marquardt steps on ``sum_i c_i p_i d_i²`` (analytic Jacobian on
-  the points with ``p_i > active_weight``; eps and scales clipped to their bounds; ``c_i`` the
-  number of input points a voxel centroid stands for), then ``sigma² = sum c p d² / (3 sum c p)``,
-  floored at ``sigma_min_m²``.
+- M-step: ``lm_steps`` Levenberg-Marquardt steps on ``sum_i c_i p_i d_i²`` (``c_i`` the number of
+  input points a voxel centroid stands for), as reweighted least squares on the radial distance
+  (see :meth:`_Fitter._m_step`; analytic Jacobian on the points with ``p_i > active_weight``; eps
+  and scales clipped to their bounds), then ``sigma² = sum c p d² / (3 sum c p)``, floored at
+  ``sigma_min_m²``.
 - Cost: the negative log-likelihood of the mixture per input point,
   ``-sum c log((1 - w_o) N(d; sigma) + w_o / V) / sum c`` in nats.
 - Switching: each time EM stalls (the cost falls by less than ``switch_tolerance`` in an
@@ -142,23 +143,27 @@ class _Fitter:
 
     def _m_step(
         self, state: SQState, ev: Evaluation, w: Array, lam: float, steps: int
-    ) -> tuple[SQState, Evaluation, float, float]:
-        """``steps`` LM steps on ``sum w d²``, the Jacobian on the points that carry weight.
+    ) -> tuple[SQState, Evaluation, float]:
+        """``steps`` LM steps on ``sum w cos0² r²``: the radial residual r reweighted by the
+        slope factor ``cos0`` of the starting state, held fixed (iteratively reweighted least
+        squares; at the start ``cos0 r = d``). The Jacobian of r is exact, so a damped step
+        always makes progress; the Jacobian is evaluated on the points that carry weight only.
 
-        Returns the state, its evaluation, the final damping and the final ``sum w d²``.
+        Returns the state, its evaluation and the final damping.
         """
+        wc = w * ev.cos * ev.cos
         active = np.flatnonzero(w > self.cfg.active_weight * self.weights)
         if active.size < 2 * state.scale.size + 5:
             active = np.arange(w.size)
-        w_act = w[active]
-        cost = float(w @ (ev.d * ev.d))
+        w_act = wc[active]
+        cost = float(wc @ (ev.r * ev.r))
         fresh = True
         for _ in range(steps):
             if fresh:
                 jac = jacobian(ev, active)
                 wj = jac * w_act
                 h = wj @ jac.T
-                g = wj @ ev.d[active]
+                g = wj @ ev.r[active]
                 diag = np.maximum(np.diag(h), 1e-12 * max(float(np.diag(h).max()), 1e-300))
             try:
                 delta = -np.linalg.solve(h + lam * np.diag(diag), g)
@@ -169,14 +174,14 @@ class _Fitter:
             delta[2:5] = np.clip(delta[2:5], -_MAX_LOG_STEP, _MAX_LOG_STEP)
             trial = apply_increment(state, delta, self.eps_bounds, self.scale_bounds)
             trial_ev = evaluate(self.points_t, trial)
-            trial_cost = float(w @ (trial_ev.d * trial_ev.d))
+            trial_cost = float(wc @ (trial_ev.r * trial_ev.r))
             fresh = bool(np.isfinite(trial_cost) and trial_cost < cost)
             if fresh:
                 state, ev, cost = trial, trial_ev, trial_cost
                 lam = max(lam * _LAMBDA[3], _LAMBDA[1])
             else:
                 lam = min(lam * _LAMBDA[4], _LAMBDA[2])
-        return state, ev, lam, cost
+        return state, ev, lam
 
     def _run(self, at: _Point, max_iter: int, tolerance: float) -> _Point:
         """EM until the cost falls by less than ``tolerance`` in one iteration, or ``max_iter``."""
@@ -187,7 +192,7 @@ class _Fitter:
                 self.stopped = True
                 break
             w = self.weights * p
-            state, ev, lam, _ = self._m_step(at.state, at.ev, w, lam, self.cfg.lm_steps)
+            state, ev, lam = self._m_step(at.state, at.ev, w, lam, self.cfg.lm_steps)
             sigma2 = self._sigma2(ev, w, at.sigma2)
             cost = self.model.nll(ev.d, sigma2, self.weights)
             self.iterations += 1
@@ -242,7 +247,8 @@ class _Fitter:
         scored.sort(key=lambda item: item[0])
         best = None
         for _, cand, ev in scored[: self.cfg.switch_candidates]:
-            state, ev, _, cost = self._m_step(cand, ev, w, _LAMBDA[0], self.cfg.switch_iterations)
+            state, ev, _ = self._m_step(cand, ev, w, _LAMBDA[0], self.cfg.switch_iterations)
+            cost = float(w @ (ev.d * ev.d))
             self.iterations += 1
             if best is None or cost < best[0]:
                 best = (cost, state, ev)

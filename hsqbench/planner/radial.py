@@ -1,4 +1,4 @@
-"""Scaled radial distance to a superquadric and its Jacobian, for the EMS M-step.
+"""Scaled radial distance to a superquadric, and the Jacobian of the radial distance, for EMS.
 
 For a point ``p`` in the superquadric's frame, ``rho = |p|`` and ``n = p / rho``, the surface along
 the ray from the centre lies at radius ``Rad(n) = G(n)^(-1/2)`` (G = F^eps1 is homogeneous of
@@ -25,9 +25,9 @@ crossing is parallel to ``c / n`` (elementwise), so ``cos(theta) = 1 / |c / n|``
     d r / d theta      = (Rad / 2) d lnG / d theta           for every shape parameter theta
     grad_p r           = n - (Rad / rho) (n - c / n)         (c / n elementwise).
 
-The Jacobian of ``d`` is taken as ``cos(theta)`` times that of ``r`` (the Gauss-Newton
-approximation: the neglected term ``r d cos(theta)`` vanishes at a zero residual); the optimiser
-accepts a step only if the exact cost falls. The pose is updated on the right,
+:func:`jacobian` is the exact Jacobian of ``r``; the M-step (:mod:`.ems`) minimises
+``sum w cos² r²`` with ``cos`` held at its value at the start of the step (reweighted least
+squares), which equals ``sum w d²`` there. The pose is updated on the right,
 ``R <- R exp([w]x)`` and ``t <- t + R v``, so the columns of the local increments are
 ``d r / d w = grad_p r x p`` and ``d r / d v = -grad_p r``. Column order:
 ``eps1, eps2, ln ax, ln ay, ln az, w (3), v (3)``.
@@ -83,6 +83,7 @@ class Evaluation:
     """
 
     d: Array
+    r: Array
     local: Array
     n: Array
     rho: Array
@@ -133,8 +134,10 @@ def evaluate(points_t: Array, state: SQState) -> Evaluation:
     c = np.stack([s_p * s_x, s_p * s_y, s_z])
     c_over_n = np.divide(c, n, out=np.zeros_like(c), where=n != 0.0)
     cos = 1.0 / np.sqrt(np.einsum("ij,ij->j", c_over_n, c_over_n))
+    r = rho - rad
     return Evaluation(
-        d=(rho - rad) * cos,
+        d=r * cos,
+        r=r,
         local=local,
         n=n,
         rho=np.where(at_centre, 0.0, rho),
@@ -150,31 +153,29 @@ def evaluate(points_t: Array, state: SQState) -> Evaluation:
 
 
 def jacobian(ev: Evaluation, rows: NDArray[np.int64] | None = None) -> Array:
-    """The (11, M) Jacobian of ``d`` at the points ``rows`` (all when None); see module doc."""
+    """The (11, M) Jacobian of the radial distance ``r`` at the points ``rows`` (all when None)."""
     sel = slice(None) if rows is None else rows
-    rad, cos, rho = ev.rad[sel], ev.cos[sel], ev.rho[sel]
+    rad, rho = ev.rad[sel], ev.rho[sel]
     n, c, c_over_n, local = ev.n[:, sel], ev.c[:, sel], ev.c_over_n[:, sel], ev.local[:, sel]
     inner = tuple(a[sel] for a in ev.inner)
     outer = tuple(a[sel] for a in ev.outer)
     s_p = c[0] + c[1]
-    half = 0.5 * rad * cos
+    half = 0.5 * rad
     jac = np.empty((11, rad.size))
     jac[0] = half * _dlog_dt(outer, ev.eps1)
     jac[1] = half * s_p * _dlog_dt(inner, ev.eps2)
-    jac[2:5] = -(rad * cos) * c
+    jac[2:5] = -rad * c
     safe_rho = np.where(rho > 0.0, rho, np.inf)
     grad = n - (rad / safe_rho) * (n - c_over_n)
-    jac[5:8] = np.cross(grad, local, axis=0) * cos
-    jac[8:11] = -grad * cos
+    jac[5:8] = np.cross(grad, local, axis=0)
+    jac[8:11] = -grad
     return jac
 
 
-def radial_residual(
-    points: Array, state: SQState, jacobian_too: bool = False
-) -> tuple[Array, Array | None]:
-    """Scaled signed radial distances (N,) of points (N, 3), and the (N, 11) Jacobian if asked."""
+def radial_residual(points: Array, state: SQState) -> tuple[Array, Array]:
+    """Scaled and plain signed radial distances ``(d, r)`` (N,) of points (N, 3), metres."""
     ev = evaluate(np.ascontiguousarray(points.T), state)
-    return ev.d, (jacobian(ev).T if jacobian_too else None)
+    return ev.d, ev.r
 
 
 def apply_increment(
@@ -183,7 +184,7 @@ def apply_increment(
     eps_bounds: tuple[float, float],
     scale_bounds: tuple[float, float],
 ) -> SQState:
-    """State after the local increment ``delta`` (column order of :func:`radial_residual`), clipped."""
+    """State after the local increment ``delta`` (column order of :func:`jacobian`), clipped."""
     w = delta[5:8]
     angle = float(np.linalg.norm(w))
     if angle > 0.0:

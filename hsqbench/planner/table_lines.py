@@ -13,7 +13,8 @@ fingers, which reach ``fingertip_overhang_m`` (9 mm) past the closing line, clea
   cross it even from straight above.
 
 Repair, only for a line that the table rule would remove at every roll and whose direction is
-within ``max_tilt_deg`` of the table plane: its direction is projected onto the plane (levelled),
+within ``level_max_angle_deg`` of the table plane: its direction is projected onto the plane
+(levelled),
 it is raised along the table normal just enough for the fingertips to stay
 ``table_clearance_m`` above the table when approaching straight down (lifted), its contacts are
 found again on its superquadric (both ways from the raised point, so ``P_G`` is re-centred), and
@@ -71,8 +72,9 @@ def level_table_lines(
     )
     blocked = ~np.any(table_clear(cands, all_lines, boxes, plane, config.table_clearance_m), axis=1)
     along = L.directions @ normal
-    max_tilt = np.deg2rad(config.max_tilt_deg)
-    idx = np.flatnonzero(blocked & (np.abs(along) <= np.sin(max_tilt)))
+    idx = np.flatnonzero(
+        blocked & (np.abs(along) <= np.sin(np.deg2rad(config.level_max_angle_deg)))
+    )
     if idx.size == 0:
         return idx
 
@@ -91,7 +93,7 @@ def level_table_lines(
     inside = shapes.inside_outside_pow(o) < 1.0
     t_pos = shapes.contact_distance(o, dl)
     t_neg = shapes.contact_distance(o, -dl)
-    cos_min = np.cos(max_tilt)
+    cos_min = np.cos(np.deg2rad(config.max_tilt_deg))
     ok = inside.copy()
     for t, sign in ((t_pos, 1.0), (t_neg, -1.0)):
         grad = shapes.gradient(o + sign * t[:, None] * dl)
