@@ -289,3 +289,27 @@ def test_hsq_planner_uses_the_context() -> None:
     assert result.grasps and "h_delta" not in result.grasps[0].factors
     for grasp in result.grasps:
         assert np.all(gripper_corners(grasp)[:, 2] >= 0.0)
+
+
+def test_contacts_no_camera_sees_need_no_support() -> None:
+    # One camera, on the box's +x side: the -x face of the box stays unseen.
+    box = Box((0.025, 0.02, 0.04), center=np.array([0.0, 0.0, 0.04]))
+    camera = np.array([[0.5, 0.05, 0.4]])
+    rng = np.random.default_rng(7)
+    cloud = union_cloud((box,), 0.0025, rng)
+    points = cloud.points[visible_mask(cloud.points, cloud.normals, camera[0])]
+    points = points + rng.normal(scale=0.001, size=points.shape)
+    sq = Superquadric(0.1, 0.1, box.half_extents, box.rotation, box.center)
+    blind = plan_from_hidden(points, [hidden(sq, points)], support_plane=TABLE)
+    aware = plan_from_hidden(
+        points, [hidden(sq, points)], support_plane=TABLE, camera_positions=camera
+    )
+    along_x = [g for g in aware.grasps if abs(g.closing_axis[0]) > 0.97]
+    assert along_x, "the line through the unseen -x face survives with the camera known"
+    assert not [g for g in blind.grasps if abs(g.closing_axis[0]) > 0.97]
+    # Through the planner interface, the context's cameras are used the same way.
+    context = PlanningContext(support_plane=TABLE, seed=0, camera_positions=camera)
+    planned = HSQPlanner().plan(points, context)
+    assert any(abs(g.closing_axis[0]) > 0.97 for g in planned.grasps)
+    with pytest.raises(ValueError, match=r"camera_positions must be a \(C, 3\)"):
+        plan_grasps(points, camera_positions=[1.0, 2.0])

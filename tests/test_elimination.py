@@ -86,6 +86,30 @@ def test_support_needs_points_at_both_contacts() -> None:
     assert np.all(reasons(far) == "support")
 
 
+def test_support_is_not_asked_of_a_contact_no_camera_sees() -> None:
+    one_face = patch((0.02, 0, 0), (1, 0, 0))
+    # Cameras on the +x side and above: the -x face is more than 75 deg from both.
+    behind = np.array([[0.6, 0.3, 0.3], [0.6, -0.3, 0.3]])
+    kept = one_line(0.02)
+    eliminate(kept, one_face, GRIPPER, CONFIG, camera_positions=behind)
+    assert np.all(reasons(kept) == "")
+    # A camera facing the -x contact could have seen it: its empty disc means nothing is there.
+    facing = np.array([[0.6, 0.3, 0.3], [-0.6, 0.0, 0.1]])
+    gone = one_line(0.02)
+    eliminate(gone, one_face, GRIPPER, CONFIG, camera_positions=facing)
+    assert np.all(reasons(gone) == "support")
+    # The seen contact must still show support: no evidence at all is no grasp.
+    empty = one_line(0.02)
+    far_cloud = patch((0.0, 0.1, 0), (0, 1, 0))
+    eliminate(empty, far_cloud, GRIPPER, CONFIG, camera_positions=behind)
+    assert np.all(reasons(empty) == "support")
+    # Neither contact visible: still no grasp.
+    above = np.array([[0.0, 0.0, 1.0]])
+    blind = one_line(0.02)
+    eliminate(blind, far_cloud, GRIPPER, CONFIG, camera_positions=above)
+    assert np.all(reasons(blind) == "support")
+
+
 def test_support_threshold_follows_cloud_density() -> None:
     dense, sparse = support_kappa(0.001, CONFIG), support_kappa(0.006, CONFIG)
     assert dense > sparse >= CONFIG.support_min_points
