@@ -1,5 +1,6 @@
 """Synthesis: principal-axis lines for every superquadric, slides and rotations for prisms,
-rectangles and circles, all antipodal and in the world frame."""
+rectangles and circles (and, with ``slide_all_shapes``, slides for every shape), all antipodal
+and in the world frame."""
 
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.synthesis import synthesize
 from hsqbench.superquadric import Superquadric
 
-CONFIG = GraspConfig()
+#: The paper's candidate families only: the tests below check its thresholds.
+CONFIG = GraspConfig(slide_all_shapes=False)
 
 
 def families(sq: Superquadric, config: GraspConfig = CONFIG) -> dict[str, int]:
@@ -135,3 +137,25 @@ def test_lines_follow_the_superquadric_pose_and_name_their_source() -> None:
 def test_no_superquadric_gives_no_candidates() -> None:
     cands = synthesize([], CONFIG)
     assert len(cands) == 0 and len(cands.lines) == 0
+
+
+def test_slide_all_shapes_slides_a_rounded_bottle_where_it_stays_antipodal() -> None:
+    # A bottle-like body: rounded (eps 0.8), 6 cm thick, 10 cm wide, 20 cm tall.
+    sq = Superquadric(0.8, 0.8, [0.03, 0.05, 0.1])
+    assert set(families(sq)) == {"axis"}
+    lines = synthesize([sq], GraspConfig(slide_all_shapes=True)).lines
+    across = (lines.family == "slide") & (np.abs(lines.directions[:, 0]) > 0.99)
+    # Lines across the thickness slide up and down the body and toward its edges ...
+    assert np.ptp(lines.centres[across, 2]) >= 0.1
+    assert np.max(np.abs(lines.centres[across, 1])) >= 0.015
+    # ... and every one meets the surface within max_tilt_deg of its direction at both ends.
+    for sign in (1.0, -1.0):
+        contact = lines.centres + sign * lines.half_lengths[:, None] * lines.directions
+        grad = np.array(
+            [sq.inside_outside_pow(c[None] + e * 1e-7)[0] for c in contact for e in np.eye(3)]
+        )
+        grad = grad.reshape(-1, 3) - sq.inside_outside_pow(contact)[:, None]
+        cos = sign * np.einsum("ij,ij->i", grad, lines.directions) / np.linalg.norm(grad, axis=1)
+        assert np.all(cos >= np.cos(np.deg2rad(CONFIG.max_tilt_deg)) - 1e-3)
+    # Near the rounded top and bottom the surface tilts away: no slide reaches the very ends.
+    assert np.max(np.abs(lines.centres[across, 2])) < 0.1

@@ -100,6 +100,7 @@ class GraspConfig:
     round_eps2_tol: float = 0.25
     round_axis_ratio_tol: float = 0.1
     max_tilt_deg: float = 15.0
+    slide_all_shapes: bool = True
     level_table_lines: bool = True
     level_max_angle_deg: float = 45.0
     # Elimination.

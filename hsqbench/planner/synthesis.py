@@ -17,7 +17,13 @@ Shape-dependent extra lines, in the superquadric's local frame:
 "-> 0" and "=" are thresholds (``flat_eps_max``, ``round_eps2_tol``, ``round_axis_ratio_tol``).
 Whatever the thresholds, an extra line is kept only where the surface normal at its contacts is
 within ``max_tilt_deg`` of the line: the antipodal property the paper relies on, which fails
-near the rounded edges of a real (eps > 0) prism. Each line is symmetric about its centre, so the
+near the rounded edges of a real (eps > 0) prism.
+
+Addition (``slide_all_shapes``): every superquadric's lines slide as a prism's and a rectangle's
+do, whatever its exponents; the antipodal test above keeps the slides that still meet the surface
+squarely. The paper's centre lines of a rounded body wider than the jaw depth (a bottle of
+eps 0.6-1 gripped across its 6 cm thickness, 10 cm wide) put the palm into the body from every
+side; the slid lines near its edge and along its height are the ones the hand can take. Each line is symmetric about its centre, so the
 contacts are at ``P_G +/- h d`` with ``h`` found by bisection on the inside-outside function.
 """
 
@@ -60,8 +66,8 @@ def _local_lines(
     """Lines of one superquadric in its frame: ``(origins (M, 3), d, e1, axis, family)`` groups."""
     a = sq.scale
     step = config.slide_step_m
-    prism = sq.eps1 <= config.flat_eps_max
-    rectangle = sq.eps2 <= config.flat_eps_max
+    prism = sq.eps1 <= config.flat_eps_max or config.slide_all_shapes
+    rectangle = sq.eps2 <= config.flat_eps_max or config.slide_all_shapes
     circle = (
         abs(sq.eps2 - 1.0) <= config.round_eps2_tol
         and abs(a[0] - a[1]) / max(a[0], a[1]) <= config.round_axis_ratio_tol
