@@ -12,7 +12,8 @@ visual mesh, sampled every ~2 mm in its settled pose, against the gripper's boxe
 (``configs/gripper.yaml``) at the grasp's approach opening. ``ok`` needs mesh samples between the
 pads (something to hold), none inside a finger or the palm (the hand would hit the object), the
 object's extent along the closing axis between the pads below the 8 cm stroke, and the fingers
-above the table. Failures are named: ``empty``, ``fingers``, ``palm``, ``wide``, ``table``.
+above the table. Failures are named: ``empty``, ``fingers(depth)``, ``palm(depth)`` (the deepest
+penetration), ``wide``, ``table``.
 
 Clouds are cached under ``cache_dir()/eval_planner_ycb`` keyed by the scene and perception
 configs and the object, seed and sensor model, so planner changes are re-measured in seconds.
@@ -125,6 +126,11 @@ def observe(
     return out
 
 
+def _depth(points: np.ndarray, box: np.ndarray) -> float:
+    """Largest distance from a point inside ``box`` ([lower, upper]) to the box's boundary."""
+    return float(np.max(np.min(np.minimum(points - box[0], box[1] - points), axis=1)))
+
+
 def check_grasp(grasp, truth: np.ndarray, plane: np.ndarray, gripper: GripperModel) -> str:
     """'ok' or the names of the failed ground-truth checks (module docstring)."""
     local = (truth - grasp.position) @ grasp.rotation
@@ -142,10 +148,17 @@ def check_grasp(grasp, truth: np.ndarray, plane: np.ndarray, gripper: GripperMod
         fails.append("empty")
     elif np.ptp(local[between, 0]) >= gripper.max_opening_m:
         fails.append("wide")
-    if inside[0].any() or inside[1].any():
-        fails.append(f"fingers({int(inside[0].sum() + inside[1].sum())})")
-    if inside[2].any():
-        fails.append("palm")
+    for name, hit, box in (
+        ("fingers", inside[0] | inside[1], None),
+        ("palm", inside[2], boxes[2]),
+    ):
+        if hit.any():
+            # Penetration: how deep the deepest mesh sample lies inside its box, millimetres.
+            if box is None:
+                depth = max(_depth(local[inside[k]], boxes[k]) for k in (0, 1) if inside[k].any())
+            else:
+                depth = _depth(local[hit], box)
+            fails.append(f"{name}({depth * 1000:.1f}mm)")
     corners = np.array(
         [[b[i, 0], b[j, 1], b[k, 2]] for b in boxes for i in (0, 1) for j in (0, 1) for k in (0, 1)]
     )

@@ -169,6 +169,31 @@ def test_sweep_removes_poses_whose_fingers_hit_points_beyond_the_contacts() -> N
     assert np.all(reasons(ok) == "")
 
 
+def test_obstacle_tolerance_ignores_two_strays_but_not_a_wall() -> None:
+    tolerant = GraspConfig(max_obstacle_points=2)
+    # Two stray points in the +x finger's volume (3 to 5.6 cm along the line) at every roll.
+    strays = np.array([[0.045, 0.0, 0.0], [0.05, 0.0, 0.0]])
+    cloud = np.concatenate([two_faces(0.02), strays])
+    strict = one_line(0.02)
+    eliminate(strict, cloud, GRIPPER, CONFIG)
+    assert set(reasons(strict)) == {"sweep"}
+    lenient = one_line(0.02)
+    eliminate(lenient, cloud, GRIPPER, tolerant)
+    assert np.all(reasons(lenient) == "")
+    # A wall there has many points in the finger: removed all the same.
+    wall = patch((0.05, 0.0, 0.0), (1, 0, 0), radius=0.02)
+    walled = one_line(0.02)
+    eliminate(walled, np.concatenate([two_faces(0.02), wall]), GRIPPER, tolerant)
+    assert set(reasons(walled)) == {"sweep"}
+    # The paper's collision rule counts the same way: 2 points behind the palm face are
+    # tolerated, a third is not.
+    palm = np.array([[0.0, 0.0, -0.05], [0.005, 0.0, -0.05], [0.0, 0.005, -0.05]])
+    for n, expect in ((2, ""), (3, "collision")):
+        cands = one_line(0.02)
+        eliminate(cands, np.concatenate([two_faces(0.02), palm[:n]]), GRIPPER, tolerant)
+        assert reasons(cands)[0] == expect
+
+
 def test_sweep_catches_points_behind_the_palm() -> None:
     # A point 15 cm behind P_G along -z: behind the palm (ends at 3.74 + 9.19 = 12.9 cm) but
     # inside the 5 cm approach sweep. Only the roll whose palm points at it is removed.
@@ -181,8 +206,11 @@ def test_sweep_catches_points_behind_the_palm() -> None:
     assert r[np.argmin(frames[:, 2, 2])] == ""
 
 
-def brute_force_hits(points, cands, boxes, radius=None, half_height=None) -> np.ndarray:
-    """Every point in every candidate's grasp frame, tested against each line's boxes."""
+def brute_force_hits(
+    points, cands, boxes, radius=None, half_height=None, max_points: int = 0
+) -> np.ndarray:
+    """Every point in every candidate's grasp frame, tested against each line's boxes; a
+    candidate is hit when more than ``max_points`` obstacle points lie in its boxes."""
     L = cands.lines
     frames = roll_frames(L.directions, L.approach0, cands.roll_angles)  # (L, R, 3, 3)
     rel = points[None] - L.centres[:, None]  # (L, M, 3)
@@ -197,7 +225,7 @@ def brute_force_hits(points, cands, boxes, radius=None, half_height=None) -> np.
         lo = boxes[:, b, 0][:, None, None, :]
         hi = boxes[:, b, 1][:, None, None, :]
         inside |= np.all((local >= lo) & (local <= hi), axis=-1)
-    return np.any(inside & obstacle[:, None, :], axis=2)
+    return np.sum(inside & obstacle[:, None, :], axis=2) > max_points
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -237,6 +265,14 @@ def test_arc_collision_test_matches_brute_force(seed: int) -> None:
     slow = brute_force_hits(points, cands, boxes, radius, half)
     assert slow.sum() > 0
     np.testing.assert_array_equal(fast, slow)
+    # Counting: more than k points inside, for a dense cloud where many candidates hold several.
+    dense = rng.uniform(-0.2, 0.2, size=(200, 3))
+    swept = line_boxes(GRIPPER, openings, 0.05)
+    for k in (1, 3):
+        fast = body_hits(dense, cands, index, swept, max_points=k)
+        slow = brute_force_hits(dense, cands, swept, max_points=k)
+        assert 0 < slow.sum() < slow.size
+        np.testing.assert_array_equal(fast, slow)
 
 
 def test_approach_opening_clears_the_contacts_within_the_stroke() -> None:

@@ -159,3 +159,11 @@ def test_slide_all_shapes_slides_a_rounded_bottle_where_it_stays_antipodal() -> 
         assert np.all(cos >= np.cos(np.deg2rad(CONFIG.max_tilt_deg)) - 1e-3)
     # Near the rounded top and bottom the surface tilts away: no slide reaches the very ends.
     assert np.max(np.abs(lines.centres[across, 2])) < 0.1
+
+
+def test_parts_thinner_than_the_noise_get_no_lines() -> None:
+    face = Superquadric(1.0, 1.0, [0.002, 0.015, 0.02])  # a fit at stage one's 2 mm floor
+    shaft = Superquadric(1.0, 1.0, [0.003, 0.003, 0.03])  # a 6 mm screwdriver shaft
+    cands = synthesize([face, shaft], CONFIG)
+    assert set(cands.lines.source.tolist()) == {1}
+    assert len(synthesize([face], GraspConfig(min_part_scale_m=0.0))) > 0

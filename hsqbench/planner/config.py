@@ -27,7 +27,7 @@ class RecoveryConfig:
     max_fit_points: int = 1500
     # Seeds: the paper's K rule, counted on a cloud of the paper's sensor density.
     k_count_voxel_m: float = 0.002
-    kmeans_parts_factor: float = 2.0
+    kmeans_parts_factor: float = 1.5
     max_parts: int = 32
     kmeans_n_init: int = 1
     duplicate_iou: float = 0.8
@@ -101,6 +101,7 @@ class GraspConfig:
     round_axis_ratio_tol: float = 0.1
     max_tilt_deg: float = 15.0
     slide_all_shapes: bool = True
+    min_part_scale_m: float = 0.0025
     level_table_lines: bool = True
     level_max_angle_deg: float = 45.0
     # Elimination.
@@ -116,6 +117,7 @@ class GraspConfig:
     unseen_incidence_deg: float = 75.0
     approach_distance_m: float = 0.05
     table_clearance_m: float = 0.003
+    max_obstacle_points: int = 0
     # Scoring.
     q_alpha: float = 0.002
     q_gamma: float = 0.5
@@ -151,6 +153,7 @@ class GraspConfig:
             "round_eps2_tol": self.round_eps2_tol,
             "round_axis_ratio_tol": self.round_axis_ratio_tol,
             "max_tilt_deg": self.max_tilt_deg,
+            "min_part_scale_m": self.min_part_scale_m,
             "level_max_angle_deg": self.level_max_angle_deg,
             "opening_margin_m": self.opening_margin_m,
             "support_min_points": self.support_min_points,
@@ -159,6 +162,7 @@ class GraspConfig:
             "unseen_incidence_deg": self.unseen_incidence_deg,
             "approach_distance_m": self.approach_distance_m,
             "table_clearance_m": self.table_clearance_m,
+            "max_obstacle_points": self.max_obstacle_points,
         }
         for key, value in non_negative.items():
             if not value >= 0:

@@ -36,7 +36,8 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
    ``table_clearance_m`` to the plane, or cross it, goes.
 4. ``collision`` (paper): a cylinder of radius ``l_j`` and half-height ``min(h, l_w / 2)`` about
    the line; cloud points between its end planes but outside it are obstacles, and a pose whose
-   gripper body (two open fingers and the palm) holds any of them goes.
+   gripper body (two open fingers and the palm) holds any of them goes (more than
+   ``max_obstacle_points`` of them: 0, the paper's rule, by default).
 5. ``sweep`` (addition): the paper only looks between the end planes. Any cloud point in the
    volume the hand sweeps also removes the pose: the open fingers, and the palm swept back by
    ``approach_distance_m`` (the straight-line approach from the pre-grasp pose). E.g. the body of
@@ -323,6 +324,12 @@ def _mark_arcs(
         intervals.append((a_lo, np.minimum(a_hi, beta)))
     if z_lo < 0.0:  # else a_hi < pi/2 <= pi - beta: the second is empty
         intervals.append((np.maximum(a_lo, np.pi - beta), a_hi))
+    if len(intervals) == 2:
+        # Intervals that meet (a point within y_half of the line at every angle) are one: the
+        # rolls at their junction are then marked once, so the markers count points.
+        (lo1, hi1), (lo2, hi2) = intervals
+        meet = (lo1 <= hi1) & (lo2 <= hi2) & (hi1 >= lo2 - _ANGLE_TOL)
+        intervals = [(lo1, np.where(meet, hi2, hi1)), (np.where(meet, np.inf, lo2), hi2)]
     step = 2.0 * np.pi / n_roll
     width = diff.shape[1]
     first, last = [], []
@@ -348,6 +355,8 @@ def _mark_arcs(
             for start, stop in arcs:
                 j_lo = np.ceil(start / step - _ARC_SLACK).astype(np.int64)
                 j_hi = np.floor(stop / step + _ARC_SLACK).astype(np.int64)
+                # A full circle ends where it starts: each roll once.
+                j_hi = np.minimum(j_hi, j_lo + n_roll - 1)
                 valid = j_lo <= j_hi
                 first.append(base[valid] + j_lo[valid])
                 last.append(base[valid] + j_hi[valid] + 1)
@@ -364,8 +373,10 @@ def body_hits(
     boxes: NDArray,
     obstacle_radius: NDArray | None = None,
     obstacle_half_height: NDArray | None = None,
+    max_points: int = 0,
 ) -> NDArray[np.bool_]:
-    """(len(lines), R): whether any obstacle point lies inside any of each line's ``boxes``
+    """(len(lines), R): whether more than ``max_points`` obstacle points lie inside each line's
+    ``boxes``
     (n, k, 2, 3), grasp frame, at each roll.
 
     The boxes' extents across the closing axis (y, z) must be the same for every line and
@@ -411,8 +422,9 @@ def body_hits(
             r = np.sqrt(r2.flat[flat])
             theta = np.arctan2(v.flat[flat], u.flat[flat])
             _mark_arcs(r, theta, flat % n, boxes[0, b], n_roll, diff)
-        covered = np.cumsum(diff, axis=1)[:, : 4 * n_roll] > 0
-        out[sl] = covered.reshape(n, 4, n_roll).any(axis=1)
+        # Points covering each roll (a point's arcs in one box are disjoint, the boxes too).
+        inside = np.cumsum(diff, axis=1)[:, : 4 * n_roll].reshape(n, 4, n_roll).sum(axis=1)
+        out[sl] = inside > max_points
     return out
 
 
@@ -485,11 +497,13 @@ def eliminate(
     half_height = np.minimum(L.half_lengths[lines], 0.5 * gripper.max_opening_m)
     radius = np.full(lines.size, gripper.jaw_length_m)
     body = line_boxes(gripper, openings[lines])
-    apply("collision", lines, body_hits(points, cands, lines, body, radius, half_height))
+    tolerated = config.max_obstacle_points
+    hits = body_hits(points, cands, lines, body, radius, half_height, tolerated)
+    apply("collision", lines, hits)
 
     lines = alive_lines()
     swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
-    apply("sweep", lines, body_hits(points, cands, lines, swept))
+    apply("sweep", lines, body_hits(points, cands, lines, swept, max_points=tolerated))
 
     names = np.array((KEPT, *REJECTION_REASONS), dtype=cands.rejected_by.dtype)
     cands.rejected_by = names[code.ravel()]

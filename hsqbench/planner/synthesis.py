@@ -115,9 +115,15 @@ def _local_lines(
 
 
 def synthesize(superquadrics: Sequence[Superquadric], config: GraspConfig) -> CandidateSet:
-    """Candidates of every superquadric (``source`` = its index in the sequence), all rolls."""
+    """Candidates of every superquadric (``source`` = its index in the sequence), all rolls.
+
+    A superquadric thinner than ``min_part_scale_m`` (smallest semi-axis) gets no line: stage
+    one's fits at its scale floor are single faces of a larger body, not parts (addition).
+    """
     source_l, origins_l, dirs_l, e1_l, axes_l, families_l = [], [], [], [], [], []
     for i, sq in enumerate(superquadrics):
+        if np.min(sq.scale) < config.min_part_scale_m:
+            continue
         for origins, d, e1, axis, family in _local_lines(sq, config):
             n = origins.shape[0]
             source_l.append(np.full(n, i, dtype=np.int64))
