@@ -103,6 +103,17 @@ def test_support_is_not_asked_of_a_contact_no_camera_sees() -> None:
     far_cloud = patch((0.0, 0.1, 0), (0, 1, 0))
     eliminate(empty, far_cloud, GRIPPER, CONFIG, camera_positions=behind)
     assert np.all(reasons(empty) == "support")
+    # A downward contact is never waived when the table is known: cameras above see no
+    # downward face, so a missing one may be the inside of the object. A vertical line whose
+    # top face is seen, its bottom not:
+    top_face = patch((0.0, 0.0, 0.02), (0, 0, 1))
+    vertical = one_line(0.02, direction=(0.0, 0.0, 1.0))
+    eliminate(vertical, top_face, GRIPPER, CONFIG, camera_positions=behind)
+    assert "" in set(reasons(vertical))  # without the table, the bottom counts as unseen
+    vertical = one_line(0.02, direction=(0.0, 0.0, 1.0))
+    table = np.array([0.0, 0.0, 1.0, 0.5])  # far below: only the direction matters here
+    eliminate(vertical, top_face, GRIPPER, CONFIG, table, camera_positions=behind)
+    assert np.all(reasons(vertical) == "support")
     # Neither contact visible: still no grasp.
     above = np.array([[0.0, 0.0, 1.0]])
     blind = one_line(0.02)

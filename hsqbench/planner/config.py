@@ -115,6 +115,7 @@ class GraspConfig:
     support_min_fraction: float = 0.1
     support_max_tilt_deg: float = 30.0
     unseen_incidence_deg: float = 75.0
+    unseen_max_down_deg: float = 30.0
     approach_distance_m: float = 0.05
     table_clearance_m: float = 0.003
     max_obstacle_points: int = 0
@@ -160,6 +161,7 @@ class GraspConfig:
             "support_min_fraction": self.support_min_fraction,
             "support_max_tilt_deg": self.support_max_tilt_deg,
             "unseen_incidence_deg": self.unseen_incidence_deg,
+            "unseen_max_down_deg": self.unseen_max_down_deg,
             "approach_distance_m": self.approach_distance_m,
             "table_clearance_m": self.table_clearance_m,
             "max_obstacle_points": self.max_obstacle_points,

@@ -25,7 +25,9 @@ that removed it (``CandidateSet.rejected_by``):
    modelled normal more than ``unseen_incidence_deg`` from the direction to every camera, e.g.
    the face of an object toward the robot, which neither side camera sees) cannot show support,
    so it is not asked to; the other contact must show it. Without this, every line needing that
-   face goes, whatever the object.
+   face goes, whatever the object. Downward faces are excluded (``unseen_max_down_deg``): from
+   above they are never seen, and a hidden superquadric fitted to the top of a body ends in a
+   downward face inside it.
 The gripper approaches open to ``min(l_w, 2 h + 2 contact_depth_m)`` (``approach_openings``,
 kept as ``ClosingLines.openings`` and ``Grasp.approach_width``): its fingers then clear the contact
 surface (noise and fit error included) and close only through it, so the open fingers are the
@@ -204,12 +206,21 @@ def support_stats(
 
 
 def unobservable_contacts(
-    cands: CandidateSet, lines: NDArray[np.int64], cameras: ArrayLike, config: GraspConfig
+    cands: CandidateSet,
+    lines: NDArray[np.int64],
+    cameras: ArrayLike,
+    config: GraspConfig,
+    support_plane: NDArray | None = None,
 ) -> NDArray[np.bool_]:
     """(len(lines), 2): whether the ``+d`` / ``-d`` contact of each line faces away from every
     camera, i.e. its modelled normal (``+d`` / ``-d``) is more than ``unseen_incidence_deg``
     from the direction to each camera. Occlusion by other surfaces is not modelled: a contact
-    facing a camera counts as observable even if something hides it (the strict choice)."""
+    facing a camera counts as observable even if something hides it (the strict choice).
+
+    With a ``support_plane``, a contact facing down (normal more than ``unseen_max_down_deg``
+    below the plane's) never counts as unobservable: cameras above a table see no downward face,
+    and one without points is as likely the inside of the object (a hidden superquadric fitted
+    to the top of a box ends inside it) as its underside."""
     L = cands.lines
     cams = np.asarray(cameras, dtype=np.float64).reshape(-1, 3)
     cos_max = np.cos(np.deg2rad(config.unseen_incidence_deg))
@@ -220,6 +231,9 @@ def unobservable_contacts(
         to_cam = cams[None, :, :] - contact[:, None, :]
         cos = np.einsum("lj,lkj->lk", normal, to_cam) / np.linalg.norm(to_cam, axis=2)
         out[:, side] = np.all(cos < cos_max, axis=1)
+        if support_plane is not None:
+            down = normal @ np.asarray(support_plane[:3], float)
+            out[:, side] &= down >= -np.sin(np.deg2rad(config.unseen_max_down_deg))
     return out
 
 
@@ -476,7 +490,7 @@ def eliminate(
     facing = stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
     supported = (stats.counts >= kappa) & facing
     if camera_positions is not None:
-        unseen = unobservable_contacts(cands, lines, camera_positions, config)
+        unseen = unobservable_contacts(cands, lines, camera_positions, config, support_plane)
         ok = np.all(supported | unseen, axis=1) & np.any(supported, axis=1)
     else:
         ok = np.all(supported, axis=1)
