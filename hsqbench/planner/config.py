@@ -51,7 +51,6 @@ class RecoveryConfig:
     eps_max: float = 2.0
     scale_min_m: float = 0.002
     sigma_min_m: float = 0.0005
-    active_weight: float = 1e-4
     # Outputs.
     inlier_threshold: float = 0.5
     surface_spacing_m: float = 0.002

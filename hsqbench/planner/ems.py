@@ -10,8 +10,7 @@ Gibbs sampler of Wu et al. (ECCV 2022); we use EM, its deterministic counterpart
   ``k = w_o (1/V) / ((1 - w_o) (2 pi sigma²)^(-3/2))``.
 - M-step: ``lm_steps`` Levenberg-Marquardt steps on ``sum_i c_i p_i d_i²`` (``c_i`` the number of
   input points a voxel centroid stands for), as reweighted least squares on the radial distance
-  (see :meth:`_Fitter._m_step`; analytic Jacobian on the points with ``p_i > active_weight``; eps
-  and scales clipped to their bounds), then ``sigma² = sum c p d² / (3 sum c p)``, floored at
+  (see :meth:`_Fitter._m_step`; analytic Jacobian; eps and scales clipped to their bounds), then ``sigma² = sum c p d² / (3 sum c p)``, floored at
   ``sigma_min_m²``.
 - Cost: the negative log-likelihood of the mixture per input point,
   ``-sum c log((1 - w_o) N(d; sigma) + w_o / V) / sum c`` in nats.
@@ -36,7 +35,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import expit
 
 from hsqbench.planner.config import RecoveryConfig
 from hsqbench.planner.radial import Evaluation, SQState, apply_increment, evaluate, jacobian
@@ -44,8 +42,11 @@ from hsqbench.planner.radial import Evaluation, SQState, apply_increment, evalua
 Array = NDArray[np.float64]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
+#: Cap on the log odds of a point (exp(700) is finite; no real point comes near it).
+_LOG_ODDS_MAX = 700.0
 #: Largest change of a log-scale in one LM step; keeps exp() finite on a wild step.
 _MAX_LOG_STEP = 2.0
+_DIAG = np.arange(11)
 #: Levenberg-Marquardt damping: start, bounds, and the factors on success and failure.
 _LAMBDA = (1e-2, 1e-7, 1e7, 0.3, 10.0)
 
@@ -64,16 +65,20 @@ class MixtureModel:
             np.log(w) - np.log(self.volume_m3) - np.log1p(-w) + 1.5 * (_LOG_2PI + np.log(sigma2))
         )
 
+    def _odds(self, d: Array, sigma2: float) -> Array:
+        """Inlier-to-outlier density ratio of each point, ``exp(-ln k - d² / 2 sigma²)``."""
+        return np.exp(np.minimum(-self.log_k(sigma2) - d * d / (2.0 * sigma2), _LOG_ODDS_MAX))
+
     def posterior(self, d: Array, sigma2: float) -> Array:
         """Inlier posterior of each point (N,)."""
-        return expit(-(self.log_k(sigma2) + d * d / (2.0 * sigma2)))
+        odds = self._odds(d, sigma2)
+        return odds / (1.0 + odds)
 
     def nll(self, d: Array, sigma2: float, weights: Array) -> float:
-        """Negative log-likelihood per point (nats), each point counted ``weights`` times."""
-        w = self.outlier_weight
-        log_in = np.log1p(-w) - 1.5 * (_LOG_2PI + np.log(sigma2)) - d * d / (2.0 * sigma2)
-        log_out = np.log(w) - np.log(self.volume_m3)
-        return float(-(weights @ np.logaddexp(log_in, log_out)) / weights.sum())
+        """Negative log-likelihood per point (nats), each point counted ``weights`` times:
+        ``-log(w_o / V) - log(1 + odds)`` averaged."""
+        log_out = np.log(self.outlier_weight) - np.log(self.volume_m3)
+        return float(-log_out - weights @ np.log1p(self._odds(d, sigma2)) / weights.sum())
 
 
 @dataclass
@@ -147,26 +152,25 @@ class _Fitter:
         """``steps`` LM steps on ``sum w cos0² r²``: the radial residual r reweighted by the
         slope factor ``cos0`` of the starting state, held fixed (iteratively reweighted least
         squares; at the start ``cos0 r = d``). The Jacobian of r is exact, so a damped step
-        always makes progress; the Jacobian is evaluated on the points that carry weight only.
+        always makes progress.
 
         Returns the state, its evaluation and the final damping.
         """
         wc = w * ev.cos * ev.cos
-        active = np.flatnonzero(w > self.cfg.active_weight * self.weights)
-        if active.size < 2 * state.scale.size + 5:
-            active = np.arange(w.size)
-        w_act = wc[active]
         cost = float(wc @ (ev.r * ev.r))
         fresh = True
         for _ in range(steps):
             if fresh:
-                jac = jacobian(ev, active)
-                wj = jac * w_act
+                jac = jacobian(ev)
+                wj = jac * wc
                 h = wj @ jac.T
-                g = wj @ ev.r[active]
-                diag = np.maximum(np.diag(h), 1e-12 * max(float(np.diag(h).max()), 1e-300))
+                g = wj @ ev.r
+                diag = h.diagonal().copy()
+                np.maximum(diag, 1e-12 * max(float(diag.max()), 1e-300), out=diag)
+            damped = h.copy()
+            damped[_DIAG, _DIAG] += lam * diag
             try:
-                delta = -np.linalg.solve(h + lam * np.diag(diag), g)
+                delta = -np.linalg.solve(damped, g)
             except np.linalg.LinAlgError:
                 fresh = False
                 lam = min(lam * _LAMBDA[4], _LAMBDA[2])

@@ -35,6 +35,7 @@ squares), which equals ``sum w d²`` there. The pose is updated on the right,
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +47,8 @@ Array = NDArray[np.float64]
 
 #: Radius below which a point counts as the centre (m): the ray direction is undefined there.
 _RHO_MIN = 1e-12
+#: Floor of ratios before a logarithm.
+_TINY = 1e-300
 
 
 @dataclass
@@ -98,41 +101,45 @@ class Evaluation:
 
 
 def _pair(u: Array, v: Array, t: float) -> tuple[Array, Array, Array, tuple[Array, Array, Array]]:
-    """``phi(u, v, t)``, the shares of u and v, and ``(ln q, ln(1 + q^(1/t)), s_lo)`` for d/dt."""
-    hi = np.maximum(np.maximum(u, v), 1e-300)
-    lo = np.minimum(u, v)
-    with np.errstate(divide="ignore"):
-        log_q = np.log(lo / hi)
-    qt = np.exp(log_q / t)
+    """``phi(u, v, t)``, the shares of u and v, and ``(ln q, ln(1 + q^(1/t)), s_lo)`` for d/dt.
+
+    ``q = lo / hi`` is floored at 1e-300, so ``ln q`` stays finite and ``q^(1/t)`` underflows to
+    a share of zero where the smaller term vanishes.
+    """
+    hi = np.maximum(u, v)
+    log_q = np.log(np.maximum(np.minimum(u, v) / np.maximum(hi, _TINY), _TINY))
+    qt = np.exp(log_q * (1.0 / t))
     log_1qt = np.log1p(qt)
     value = hi * np.exp(t * log_1qt)
     s_lo = qt / (1.0 + qt)
-    u_hi = u >= v
-    s_u = np.where(u_hi, 1.0 - s_lo, s_lo)
+    s_u = np.where(u >= v, 1.0 - s_lo, s_lo)
     return value, s_u, 1.0 - s_u, (log_q, log_1qt, s_lo)
 
 
 def _dlog_dt(pieces: tuple[Array, Array, Array], t: float) -> Array:
-    """``d ln phi / d t = ln(1 + q^(1/t)) - s_lo ln(q) / t`` (0 * ln 0 taken as 0)."""
+    """``d ln phi / d t = ln(1 + q^(1/t)) - s_lo ln(q) / t``."""
     log_q, log_1qt, s_lo = pieces
-    s_log_q = np.where(s_lo > 0.0, s_lo * np.where(s_lo > 0.0, log_q, 0.0), 0.0)
-    return log_1qt - s_log_q / t
+    return log_1qt - s_lo * log_q * (1.0 / t)
 
 
 def evaluate(points_t: Array, state: SQState) -> Evaluation:
     """Scaled signed radial distances ``d`` (N,), metres, of the points ``points_t`` (3, N)."""
     local = state.rotation.T @ (points_t - state.translation[:, None])
     rho = np.sqrt(np.einsum("ij,ij->j", local, local))
-    at_centre = rho < _RHO_MIN
-    n = local / np.where(at_centre, 1.0, rho)
-    if at_centre.any():
-        n[:, at_centre] = ((0.0,), (0.0,), (1.0,))
-    u = (n / state.scale[:, None]) ** 2
+    n = local / np.maximum(rho, _RHO_MIN)
+    if rho.min() < _RHO_MIN:  # the centre itself: any direction will do
+        n[:, rho < _RHO_MIN] = ((0.0,), (0.0,), (1.0,))
+        rho = np.where(rho < _RHO_MIN, 0.0, rho)
+    u = n / state.scale[:, None]
+    u *= u
     inner, s_x, s_y, inner_pieces = _pair(u[0], u[1], state.eps2)
     g, s_p, s_z, outer_pieces = _pair(inner, u[2], state.eps1)
     rad = 1.0 / np.sqrt(g)
-    c = np.stack([s_p * s_x, s_p * s_y, s_z])
-    c_over_n = np.divide(c, n, out=np.zeros_like(c), where=n != 0.0)
+    c = np.empty_like(u)
+    np.multiply(s_p, s_x, out=c[0])
+    np.multiply(s_p, s_y, out=c[1])
+    c[2] = s_z
+    c_over_n = c / np.where(n != 0.0, n, np.inf)
     cos = 1.0 / np.sqrt(np.einsum("ij,ij->j", c_over_n, c_over_n))
     r = rho - rad
     return Evaluation(
@@ -140,12 +147,12 @@ def evaluate(points_t: Array, state: SQState) -> Evaluation:
         r=r,
         local=local,
         n=n,
-        rho=np.where(at_centre, 0.0, rho),
+        rho=rho,
         rad=rad,
         c=c,
         c_over_n=c_over_n,
         cos=cos,
-        inner=(*inner_pieces[:2], inner_pieces[2]),
+        inner=inner_pieces,
         outer=outer_pieces,
         eps1=state.eps1,
         eps2=state.eps2,
@@ -154,21 +161,25 @@ def evaluate(points_t: Array, state: SQState) -> Evaluation:
 
 def jacobian(ev: Evaluation, rows: NDArray[np.int64] | None = None) -> Array:
     """The (11, M) Jacobian of the radial distance ``r`` at the points ``rows`` (all when None)."""
-    sel = slice(None) if rows is None else rows
-    rad, rho = ev.rad[sel], ev.rho[sel]
-    n, c, c_over_n, local = ev.n[:, sel], ev.c[:, sel], ev.c_over_n[:, sel], ev.local[:, sel]
-    inner = tuple(a[sel] for a in ev.inner)
-    outer = tuple(a[sel] for a in ev.outer)
-    s_p = c[0] + c[1]
+    if rows is None:
+        rad, rho, n, c, c_over_n, local = ev.rad, ev.rho, ev.n, ev.c, ev.c_over_n, ev.local
+        inner, outer = ev.inner, ev.outer
+    else:
+        rad, rho, n = ev.rad[rows], ev.rho[rows], ev.n[:, rows]
+        c, c_over_n, local = ev.c[:, rows], ev.c_over_n[:, rows], ev.local[:, rows]
+        inner = tuple(a[rows] for a in ev.inner)
+        outer = tuple(a[rows] for a in ev.outer)
     half = 0.5 * rad
     jac = np.empty((11, rad.size))
-    jac[0] = half * _dlog_dt(outer, ev.eps1)
-    jac[1] = half * s_p * _dlog_dt(inner, ev.eps2)
-    jac[2:5] = -rad * c
-    safe_rho = np.where(rho > 0.0, rho, np.inf)
-    grad = n - (rad / safe_rho) * (n - c_over_n)
-    jac[5:8] = np.cross(grad, local, axis=0)
-    jac[8:11] = -grad
+    np.multiply(half, _dlog_dt(outer, ev.eps1), out=jac[0])
+    np.multiply(half * (c[0] + c[1]), _dlog_dt(inner, ev.eps2), out=jac[1])
+    np.multiply(-rad, c, out=jac[2:5])
+    grad = n - (rad / np.where(rho > 0.0, rho, np.inf)) * (n - c_over_n)
+    # grad x local, row by row
+    jac[5] = grad[1] * local[2] - grad[2] * local[1]
+    jac[6] = grad[2] * local[0] - grad[0] * local[2]
+    jac[7] = grad[0] * local[1] - grad[1] * local[0]
+    np.negative(grad, out=jac[8:11])
     return jac
 
 
@@ -186,18 +197,17 @@ def apply_increment(
 ) -> SQState:
     """State after the local increment ``delta`` (column order of :func:`jacobian`), clipped."""
     w = delta[5:8]
-    angle = float(np.linalg.norm(w))
+    angle = math.sqrt(float(w @ w))
+    rotation = state.rotation
     if angle > 0.0:
-        k = w / angle
-        kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-        step = np.eye(3) + np.sin(angle) * kx + (1.0 - np.cos(angle)) * (kx @ kx)
-        rotation = state.rotation @ step
-    else:
-        rotation = state.rotation
+        kx, ky, kz = w / angle
+        k = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+        rotation = rotation @ (np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k))
+    lo, hi = eps_bounds
     return SQState(
-        float(np.clip(state.eps1 + delta[0], *eps_bounds)),
-        float(np.clip(state.eps2 + delta[1], *eps_bounds)),
-        np.clip(state.scale * np.exp(delta[2:5]), *scale_bounds),
+        min(max(state.eps1 + float(delta[0]), lo), hi),
+        min(max(state.eps2 + float(delta[1]), lo), hi),
+        np.minimum(np.maximum(state.scale * np.exp(delta[2:5]), scale_bounds[0]), scale_bounds[1]),
         rotation,
         state.translation + state.rotation @ delta[8:11],
     )
