@@ -46,7 +46,7 @@ def test_flying_pixels_go_and_a_thin_bar_stays():
     drop = isolated_mask(points, CONFIG)
     far = distance_to(parts, flying) > 0.01
     assert far.sum() > 100
-    assert np.all(drop[len(surface) :][far]), f"{np.sum(~drop[len(surface):][far])} kept"
+    assert np.all(drop[len(surface) :][far]), f"{np.sum(~drop[len(surface) :][far])} kept"
     assert not np.any(drop[: len(surface)][is_bar])
     assert np.mean(drop[: len(surface)]) < 0.005
 
@@ -68,7 +68,8 @@ def test_zero_neighbours_turns_cleaning_off():
 
 
 @pytest.mark.parametrize(
-    ("kwargs", "name"), [({"radius_m": 0.0}, "radius_m"), ({"min_neighbours": -1}, "min_neighbours")]
+    ("kwargs", "name"),
+    [({"radius_m": 0.0}, "radius_m"), ({"min_neighbours": -1}, "min_neighbours")],
 )
 def test_bad_config_is_named(kwargs, name):
     with pytest.raises(ValueError, match=name):
