@@ -284,3 +284,24 @@ def test_object_inertia_is_the_assets() -> None:
     np.testing.assert_allclose(tensor, asset.inertia, rtol=1e-6, atol=1e-12)
     with pytest.raises(ValueError, match="positive definite"):
         principal_inertia(np.diag([1.0, 1.0, -1.0]))
+
+
+def test_min_area_rectangle_of_a_diagonal_bar_and_the_pose_that_places_it() -> None:
+    from hsqbench.sim.scene import min_area_rectangle
+
+    # A 0.30 x 0.04 m bar turned 30 degrees and offset from the origin: its axis-aligned box is
+    # about 0.28 x 0.18 m, its oriented footprint the bar itself.
+    a = np.deg2rad(30.0)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    corners = np.array([[-0.15, -0.02], [0.15, -0.02], [0.15, 0.02], [-0.15, 0.02]])
+    pts = corners @ rot.T + np.array([0.03, -0.01])
+    fp = min_area_rectangle(pts)
+    assert sorted(fp.extents_xy) == pytest.approx([0.04, 0.30], abs=1e-9)
+    assert fp.centre_xy == pytest.approx([0.03, -0.01], abs=1e-9)
+    # The pose puts the rectangle's centre at the requested point with the requested yaw.
+    xy, yaw = fp.object_pose(np.array([0.5, 0.1]), 0.2)
+    c, s = np.cos(yaw), np.sin(yaw)
+    placed = pts @ np.array([[c, -s], [s, c]]).T + xy
+    assert placed.mean(axis=0) == pytest.approx([0.5, 0.1], abs=1e-9)
+    side = placed[1] - placed[0] if fp.extents_xy[0] > fp.extents_xy[1] else placed[2] - placed[1]
+    assert np.arctan2(side[1], side[0]) % np.pi == pytest.approx(0.2 % np.pi, abs=1e-9)
