@@ -51,6 +51,7 @@ class RecoveryConfig:
     eps_max: float = 2.0
     scale_min_m: float = 0.002
     sigma_min_m: float = 0.0005
+    hidden_sigma_decay: float = 0.7
     # Outputs.
     inlier_threshold: float = 0.5
     surface_spacing_m: float = 0.002
@@ -76,6 +77,10 @@ class RecoveryConfig:
             raise ValueError(f"need 0 < eps_min < eps_max <= 2, got {self.eps_min}, {self.eps_max}")
         if self.max_fit_points < 11 or self.max_parts < 1 or self.em_max_iterations < 1:
             raise ValueError("max_fit_points >= 11, max_parts >= 1, em_max_iterations >= 1")
+        if not 0.0 <= self.hidden_sigma_decay < 1.0:
+            raise ValueError(
+                f"hidden_sigma_decay must lie in [0, 1), got {self.hidden_sigma_decay}"
+            )
         if not self.start_eps:
             raise ValueError("start_eps needs at least one (eps1, eps2) pair")
 

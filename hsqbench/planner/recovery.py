@@ -153,6 +153,7 @@ def _fit(
     max_switches: int,
     cfg: RecoveryConfig,
     stop: Callable[[Array], bool] | None = None,
+    sigma_decay: float = 0.0,
 ) -> EMSResult:
     """EMS from ``init``; the starting noise level is the rms distance of ``part`` to ``init``."""
     d, _ = radial_residual(part, init)
@@ -168,6 +169,7 @@ def _fit(
         max_switches,
         cfg,
         stop,
+        sigma_decay,
     )
 
 
@@ -326,7 +328,14 @@ def recover_hidden_superquadrics(
         init = inertia_ellipsoid(part, cfg.scale_min_m, problem.scale_max_m)
         stop = _duplicate_test(done, cfg.inlier_threshold, cfg.duplicate_iou)
         res = _fit(
-            problem, init, part, cfg.hidden_outlier_weight, cfg.hidden_max_switches, cfg, stop
+            problem,
+            init,
+            part,
+            cfg.hidden_outlier_weight,
+            cfg.hidden_max_switches,
+            cfg,
+            stop,
+            cfg.hidden_sigma_decay,
         )
         inlier_voxels = res.posterior > cfg.inlier_threshold
         inliers = np.flatnonzero(inlier_voxels[down.inverse])
