@@ -41,7 +41,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.planner.api import (
-    PlanningContext,
     PlanResult,
     resolve_config,
     resolve_gripper,
@@ -54,6 +53,7 @@ from hsqbench.planner.baselines.config import (
     resolve_baselines_config,
 )
 from hsqbench.planner.baselines.normals import estimate_normals, orient_outward
+from hsqbench.planner.baselines.planner import BaselinePlanner
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
@@ -311,26 +311,8 @@ def plan_antipodal(
     )
 
 
-class AntipodalPlanner:
+class AntipodalPlanner(BaselinePlanner):
     """The antipodal baseline behind the :class:`~hsqbench.planner.api.Planner` protocol."""
 
     name = "antipodal"
-
-    def __init__(
-        self,
-        config: BaselinesConfig | str | Path | None = None,
-        gripper: GripperModel | None = None,
-    ) -> None:
-        self.config = resolve_baselines_config(config)
-        grasp = resolve_config(self.config.planner).grasp
-        self.gripper = gripper if gripper is not None else resolve_gripper(grasp.gripper)
-
-    def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
-        return plan_antipodal(
-            points,
-            self.config,
-            packed=context.packed,
-            support_plane=context.support_plane,
-            seed=context.seed,
-            gripper=self.gripper,
-        )
+    plan_function = staticmethod(plan_antipodal)

@@ -22,14 +22,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from hsqbench.planner.api import (
-    PlanningContext,
     PlanResult,
     plan_from_hidden,
     resolve_config,
-    resolve_gripper,
     validate_cloud,
 )
 from hsqbench.planner.baselines.config import BaselinesConfig, resolve_baselines_config
+from hsqbench.planner.baselines.planner import BaselinePlanner
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.recovery import HiddenSuperquadric, fit_superquadric
 from hsqbench.superquadric import alpha_beta
@@ -92,27 +91,9 @@ def plan_single_sq(
     return result
 
 
-class SingleSQPlanner:
+class SingleSQPlanner(BaselinePlanner):
     """The single-superquadric baseline behind the :class:`~hsqbench.planner.api.Planner`
     protocol."""
 
     name = "single-sq"
-
-    def __init__(
-        self,
-        config: BaselinesConfig | str | Path | None = None,
-        gripper: GripperModel | None = None,
-    ) -> None:
-        self.config = resolve_baselines_config(config)
-        grasp = resolve_config(self.config.planner).grasp
-        self.gripper = gripper if gripper is not None else resolve_gripper(grasp.gripper)
-
-    def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
-        return plan_single_sq(
-            points,
-            self.config,
-            packed=context.packed,
-            support_plane=context.support_plane,
-            seed=context.seed,
-            gripper=self.gripper,
-        )
+    plan_function = staticmethod(plan_single_sq)
