@@ -19,6 +19,10 @@ from hsqbench.experiment.results import VOLATILE_COLUMNS, load_results
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.experiment.seeds import build_trials
 
+# Trials that take a moment, so the second worker always gets some: with instant trials one
+# worker could finish them all before the other has started on a loaded machine.
+TRIAL_S = 0.1
+
 CONFIG = ExperimentConfig(
     planners=("a", "b"),
     isolated=IsolatedConfig(objects=("mug", "bowl", "apple", "banana"), attempts_per_object=2),
@@ -35,14 +39,14 @@ def _rows(run_dir: Path, table: str = "attempts") -> list[tuple]:
 @pytest.fixture(scope="module")
 def serial_run(tmp_path_factory) -> Path:
     run_dir = tmp_path_factory.mktemp("serial") / "run"
-    backend = FakeBackend(raise_on=("apple",))
+    backend = FakeBackend(raise_on=("apple",), sleep_s=TRIAL_S)
     run_benchmark(CONFIG, run_dir, backend=backend, executor=SerialExecutor(), progress=False)
     return run_dir
 
 
 def test_process_pool_gives_the_same_rows_as_one_process(serial_run, tmp_path) -> None:
     run_dir = tmp_path / "pool"
-    backend = FakeBackend(raise_on=("apple",))
+    backend = FakeBackend(raise_on=("apple",), sleep_s=TRIAL_S)
     summary = run_benchmark(
         CONFIG, run_dir, backend=backend, executor=LocalExecutor(jobs=2), progress=False
     )
