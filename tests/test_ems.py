@@ -89,3 +89,20 @@ def test_stop_hook_ends_the_run() -> None:
         lambda p: True,
     )
     assert res.stopped and res.iterations == 0
+
+
+def test_annealing_floors_sigma_early_and_not_later() -> None:
+    cfg = RecoveryConfig()
+    pts = np.zeros((5, 3))
+    fitter = _Fitter(pts, np.ones(5), MixtureModel(0.9, 1.0), 1.0, cfg, sigma_decay=0.5)
+    fitter.sigma2_start = 1e-4
+    state = SQState(1.0, 1.0, np.full(3, 0.05), np.eye(3), np.zeros(3))
+    ev = fitter._at(state, 1e-4).ev
+    # Points 5 cm off the surface. Zero weights: the estimate falls back to 1e-8 and the
+    # annealing floor (then sigma_min) decides; any weight: the data, sigma² = (5 cm)² / 3.
+    w = np.full(5, 1e-12)
+    fitter.iterations = 3
+    assert np.isclose(fitter._sigma2(ev, np.zeros(5), 1e-8), 1e-4 * 0.5**6)
+    fitter.iterations = 40
+    assert fitter._sigma2(ev, np.zeros(5), 1e-8) == cfg.sigma_min_m**2
+    assert np.isclose(fitter._sigma2(ev, w, 1e-8), 0.05**2 / 3.0, rtol=1e-3)

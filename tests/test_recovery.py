@@ -181,6 +181,23 @@ def test_same_seed_same_result() -> None:
         assert (x.alpha, x.beta, x.seed) == (y.alpha, y.beta, y.seed)
 
 
+def test_no_two_results_are_duplicates() -> None:
+    """Seeds that turn into copies of an earlier result are dropped."""
+    rng = np.random.default_rng(9)
+    pc = union_cloud(cylinder_with_box_on_top(random_rotation(rng)), 0.0015, rng)
+    cloud = pc.points + rng.normal(scale=0.001, size=pc.points.shape)
+    cfg = RecoveryConfig()
+    hidden = recover_hidden_superquadrics(cloud, cfg)
+    assert [h.seed for h in hidden] == sorted(h.seed for h in hidden) and hidden[0].seed == 0
+    for i, x in enumerate(hidden):
+        for y in hidden[i + 1 :]:
+            inter = np.intersect1d(x.inliers, y.inliers).size
+            union = np.union1d(x.inliers, y.inliers).size
+            assert inter < cfg.duplicate_iou * union
+    everything = recover_hidden_superquadrics(cloud, RecoveryConfig(duplicate_iou=1.0))
+    assert len(everything) > len(hidden)
+
+
 # ----------------------------------------------------------------------------- bad input
 BAD_CLOUDS = {
     "empty": (np.zeros((0, 3)), "empty"),
