@@ -232,3 +232,36 @@ def test_benchmark_command_end_to_end_with_a_stand_in_backend(tmp_path, monkeypa
     assert code == 1  # the foam_brick trials failed with an error: a failing exit, said why
     assert "1 already done" in out and "tables.md" in out and "retry-errors" in err
     assert (run_dir / "tables.md").exists()
+
+
+def test_unplaceable_draws_are_redrawn_recorded_and_kept_on_resume(tmp_path) -> None:
+    import csv
+    import json
+
+    from hsqbench.experiment.seeds import packed_round_objects
+
+    first = packed_round_objects(SMALL.packed.objects, 2, 0, 0)
+    backend = FakeBackend(unplaceable=(first,))
+    run_dir = tmp_path / "r"
+    summary = run_benchmark(SMALL, run_dir, backend=backend, progress=False)
+    assert summary.errors == 0  # the fake backend raises on an unplaceable round: none ran
+    with open(run_dir / "rounds.csv") as f:
+        rounds = [r for r in csv.DictReader(f) if r["trial_index"] == "0"]
+    assert len(rounds) == 2 and len({r["objects"] for r in rounds}) == 1  # both planners
+    assert rounds[0]["objects"] != ";".join(first)
+    assert all(";".join(first) in r["detail"] and "redrawn" in r["detail"] for r in rounds)
+    draws = json.loads((run_dir / "run.json").read_text())["packed_draws"]
+    assert draws["s0/round/000"] == {
+        "objects": rounds[0]["objects"].split(";"),
+        "rejected": [list(first)],
+    }
+    assert all(d["objects"] != list(first) for d in draws.values())
+
+    class Moved(FakeBackend):  # same settings, other placement (as if the hulls had changed)
+        def placeable(self, objects, seed):
+            return True
+
+    with pytest.raises(ResultsError, match=r"round/000.*other objects"):
+        run_benchmark(SMALL, run_dir, backend=Moved(unplaceable=(first,)), resume=True)
+    again = run_benchmark(SMALL, run_dir, backend=backend, resume=True, progress=False)
+    assert (again.skipped, again.ran) == (N_SMALL, 0)

@@ -113,3 +113,89 @@ def test_quick_protocol_is_tiny() -> None:
     specs = build_trials(load_experiment_config("quick"))
     assert len(specs) <= 4
     assert {s.experiment for s in specs} == {"isolated", "packed"}
+
+
+# ---- packed draws that cannot be placed -------------------------------------------------------
+
+
+def _refusing(refused: set[tuple[str, ...]], calls: list | None = None):
+    def placeable(objects: tuple[str, ...], seed: int) -> bool:
+        if calls is not None:
+            calls.append((objects, seed))
+        return objects not in refused
+
+    return placeable
+
+
+def test_unplaceable_draw_is_replaced_by_the_rounds_next_draw() -> None:
+    import numpy as np
+
+    config = load_experiment_config("paper")
+    pool, k = config.packed.objects, config.packed.objects_per_round
+    first = packed_round_objects(pool, k, 0, 2)
+    calls: list = []
+    specs = build_trials(config, experiments=["packed"], placeable=_refusing({first}, calls))
+    round2 = [s for s in specs if s.index == 2]
+    # The documented contract: the same generator draws again.
+    rng = np.random.default_rng(derive_seed(0, "packed", "draw", 2))
+    rng.choice(len(pool), size=k, replace=False)
+    second = tuple(pool[i] for i in np.sort(rng.choice(len(pool), size=k, replace=False)))
+    assert {s.objects for s in round2} == {second} != {first}
+    assert {s.rejected_draws for s in round2} == {(first,)}
+    assert {s.planner for s in round2} == set(config.planners)  # every planner, the same draw
+    assert "redrawn: 1 draw(s)" in round2[0].draw_note and ";".join(first) in round2[0].draw_note
+    # Asked once per draw (not per planner), with the seed the round's scene is built with.
+    assert [c for c in calls if c[0] == first] == [(first, derive_seed(0, "packed", "round", 2))]
+    assert len(calls) == config.packed.rounds + 1
+    # Other rounds keep their first draw; the same inputs give the same list.
+    plain = build_trials(config, experiments=["packed"])
+    assert [s.objects for s in specs if s.index != 2] == [s.objects for s in plain if s.index != 2]
+    again = build_trials(config, experiments=["packed"], placeable=_refusing({first}))
+    assert again == specs
+
+
+def test_no_placeable_draw_is_a_clear_error() -> None:
+    from dataclasses import replace
+
+    from hsqbench.experiment.seeds import PackedDrawError, draw_packed_round
+
+    config = load_experiment_config("quick")
+    with pytest.raises(PackedDrawError, match=r"none of 3 draws.*packed.max_draws"):
+        build_trials(
+            replace(config, packed=replace(config.packed, max_draws=3)),
+            placeable=lambda objects, seed: False,
+        )
+    # A set drawn again is not checked again, but it still uses up a draw.
+    calls: list = []
+    pool = ("a", "b", "c")
+    with pytest.raises(PackedDrawError):
+        draw_packed_round(pool, 3, 0, 0, _refusing({pool}, calls), max_draws=4)
+    assert len(calls) == 1
+
+
+def test_max_draws_must_be_positive(tmp_path) -> None:
+    import yaml
+
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump({"packed": {"max_draws": 0}}))
+    with pytest.raises(ConfigError, match="max_draws"):
+        load_experiment_config(path)
+
+
+@pytest.mark.slow
+def test_paper_rounds_are_all_placeable_with_the_real_scene() -> None:
+    """Round 0 of base seed 0 first draws cracker box, bowl, mug, screwdriver and hammer,
+    which the scene cannot place (the first full run lost it); it is redrawn."""
+    from hsqbench.experiment.backend import SimBackend
+    from hsqbench.settings import ycb_dir
+
+    if ycb_dir(required=False) is None:
+        pytest.skip("HSQ_YCB_DIR is not set: YCB objects unavailable")
+    backend = SimBackend()
+    specs = build_trials(
+        load_experiment_config("paper"), experiments=["packed"], placeable=backend.placeable
+    )
+    bad = ("cracker_box", "bowl", "mug", "phillips_screwdriver", "hammer")
+    round0 = {s.objects for s in specs if s.index == 0}
+    assert len(round0) == 1 and bad not in round0
+    assert {s.rejected_draws for s in specs if s.index == 0} == {(bad,)}

@@ -43,6 +43,11 @@ class TrialBackend(Protocol):
         """Fail early, in the parent, with a clear message when trials cannot run."""
         ...
 
+    def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
+        """Whether a packed round of ``objects`` with ``seed`` can be set up (its objects placed
+        apart). Called in the parent while the trial list is built, so it must be cheap."""
+        ...
+
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult: ...
 
     def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult: ...
@@ -134,6 +139,7 @@ class SimBackend:
 
     def __post_init__(self) -> None:
         self._config: Any = None
+        self._scene: Any = None
 
     def __getstate__(self) -> dict[str, Any]:
         return {"trial_config": self.trial_config, "name": self.name}
@@ -142,6 +148,7 @@ class SimBackend:
         self.trial_config = state["trial_config"]
         self.name = state["name"]
         self._config = None
+        self._scene = None
 
     @staticmethod
     def _module() -> Any:
@@ -194,6 +201,14 @@ class SimBackend:
         unknown = [p for p in planners if p not in known]
         if unknown:
             raise ValueError(f"unknown planner(s) {unknown}; known: {sorted(known)}")
+
+    def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
+        """The scene builder's own placement with the trial config's scene, without a model."""
+        from hsqbench.sim.scene import load_scene_config, packed_placeable
+
+        if self._scene is None:
+            self._scene = load_scene_config(self._trial_config().scene)
+        return packed_placeable(objects, seed, self._scene)
 
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult:
         return self._module().run_isolated_trial(obj, seed, planner, self._trial_config())

@@ -72,13 +72,16 @@ class PackedConfig:
     """Packed scenes: ``rounds`` rounds, each of ``objects_per_round`` objects drawn from ``objects``.
 
     A round is run whole by the trial runner (it stops when the table is empty or after two
-    consecutive failed attempts, the paper's rule).
+    consecutive failed attempts, the paper's rule). A draw whose objects cannot be placed apart
+    is replaced by the next draw of the same round's stream, up to ``max_draws`` draws (see
+    :func:`hsqbench.experiment.seeds.draw_packed_round`).
     """
 
     enabled: bool = True
     objects: tuple[str, ...] = YCB_OBJECTS
     rounds: int = 15
     objects_per_round: int = 5
+    max_draws: int = 10
 
     def __post_init__(self) -> None:
         _check_objects(self.objects, "packed.objects")
@@ -89,6 +92,8 @@ class PackedConfig:
                 f"packed.objects_per_round must be between 1 and the {len(self.objects)} objects "
                 f"of packed.objects, got {self.objects_per_round}"
             )
+        if self.max_draws < 1:
+            raise ConfigError(f"packed.max_draws must be >= 1, got {self.max_draws}")
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,8 @@ class FakeBackend:
     interrupt_after: raise ``KeyboardInterrupt`` at the start of this process's n-th call
         (0-based count of calls), to stop a run part way.
     sleep_s: seconds each trial waits, to make a run long enough to kill.
+    unplaceable: groups of objects that cannot be placed together: a packed draw holding all
+        objects of a group is refused by :meth:`placeable` (and raises if run anyway).
     """
 
     success: dict[str, float] = field(default_factory=dict)
@@ -44,6 +46,7 @@ class FakeBackend:
     exit_on: tuple[str, ...] = ()
     interrupt_after: int | None = None
     sleep_s: float = 0.0
+    unplaceable: tuple[tuple[str, ...], ...] = ()
     name: str = "fake"
 
     def __post_init__(self) -> None:
@@ -54,10 +57,14 @@ class FakeBackend:
             "backend": self.name,
             "success": dict(sorted(self.success.items())),
             "default_success": self.default_success,
+            "unplaceable": [list(g) for g in self.unplaceable],
         }
 
     def check(self, planners: tuple[str, ...]) -> None:
         return None
+
+    def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
+        return not any(set(group) <= set(objects) for group in self.unplaceable)
 
     def _enter(self, what: tuple[str, ...]) -> None:
         if self.interrupt_after is not None and self._calls >= self.interrupt_after:
@@ -98,6 +105,8 @@ class FakeBackend:
     def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult:
         """A round with the paper's stop rule: table empty or two consecutive failures."""
         self._enter(("round", *objects))
+        if not self.placeable(tuple(objects), seed):
+            raise ValueError(f"fake backend: could not place {objects} without contact")
         rng = np.random.default_rng(seed)
         left = list(objects)
         attempts: list[Attempt] = []

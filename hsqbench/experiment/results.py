@@ -4,8 +4,10 @@ Layout of ``results/<run>/``:
 
 - ``attempts.csv``: one row per grasp attempt (isolated and packed), or one ``status=error`` row
   for a trial that could not run (``attempt_index=-1``, ``n_attempts=0``).
-- ``rounds.csv``: one row per packed round, written *after* the round's attempt rows.
-- ``run.json``: the full config, its hash, code version, machine and the sessions that ran.
+- ``rounds.csv``: one row per packed round, written *after* the round's attempt rows; its
+  ``detail`` names the draws rejected before the round's objects, if any (not placeable).
+- ``run.json``: the full config, its hash, code version, machine, the sessions that ran and
+  ``packed_draws`` (each round's objects and rejected draws).
 
 Durability: only the parent process writes. All rows of one trial go to a file in one
 ``os.write`` on an ``O_APPEND`` descriptor, followed by ``fsync``; every field is kept on one
@@ -201,6 +203,7 @@ def rows_for(
             "n_attempts": len(result.attempts),
             "n_success": sum(a.success for a in result.attempts),
             "status": STATUS_OK,
+            "detail": spec.draw_note,
         }
     else:
         round_row = {
@@ -208,7 +211,7 @@ def rows_for(
             "n_objects": len(spec.objects),
             "n_attempts": 0,
             "status": STATUS_ERROR,
-            "detail": run.error or "unknown error",
+            "detail": "; ".join(filter(None, (run.error or "unknown error", spec.draw_note))),
         }
     return attempt_rows, {c: _fmt(round_row.get(c)) for c in ROUND_COLUMNS}
 

@@ -29,7 +29,7 @@ from hsqbench.experiment.results import (
     ResultsError,
     ResultStore,
 )
-from hsqbench.experiment.seeds import build_trials
+from hsqbench.experiment.seeds import TrialSpec, build_trials
 from hsqbench.settings import code_version
 
 
@@ -98,6 +98,19 @@ def _move_aside(run_dir: Path) -> Path:
     return target
 
 
+def packed_draws(specs: Iterable[TrialSpec]) -> dict[str, dict[str, list]]:
+    """The draw of each packed round, for ``run.json``: ``s<base>/round/<index>`` -> the
+    objects and the rejected draws (those that could not be placed apart)."""
+    out: dict[str, dict[str, list]] = {}
+    for s in specs:
+        if s.experiment == "packed":
+            out[f"s{s.base_seed}/round/{s.index:03d}"] = {
+                "objects": list(s.objects),
+                "rejected": [list(d) for d in s.rejected_draws],
+            }
+    return out
+
+
 def run_benchmark(
     config: ExperimentConfig,
     run_dir: str | Path,
@@ -124,14 +137,16 @@ def run_benchmark(
         retry_errors: when resuming, run again the trials recorded as errors.
 
     Raises:
-        ResultsError: the folder holds another config's run, or exists without ``resume``.
+        ResultsError: the folder holds another config's run, or exists without ``resume``, or
+            a packed round now draws other objects than recorded in ``run.json``.
+        PackedDrawError: a packed round has no placeable draw within ``packed.max_draws``.
         TrialRunnerUnavailable: the default backend cannot import the trial runner.
         KeyboardInterrupt: re-raised after recording the interruption; rows written so far stay.
     """
     run_dir = Path(run_dir)
     backend = backend if backend is not None else SimBackend(config.trial_config)
     executor = executor if executor is not None else SerialExecutor()
-    specs = build_trials(config, planners, experiments)
+    specs = build_trials(config, planners, experiments, backend.placeable)
     selected_planners = tuple(dict.fromkeys(s.planner for s in specs))
     backend.check(selected_planners)
     fingerprint = backend.fingerprint()
@@ -151,6 +166,19 @@ def run_benchmark(
         )
     if has_data and meta is None:
         raise ResultsError(f"{run_dir} has results but no {RUN_FILE}: choose another --run name")
+    draws = packed_draws(specs)
+    if meta is not None:
+        changed = sorted(
+            k
+            for k, v in draws.items()
+            if k in meta.get("packed_draws", {}) and meta["packed_draws"][k] != v
+        )
+        if changed:
+            raise ResultsError(
+                f"{run_dir}: the packed rounds {changed} now draw other objects than when the run "
+                f"was started (recorded in {RUN_FILE}); the objects' footprints or the scene's "
+                "placement changed. Choose a new --run name, or --force to move the old run aside"
+            )
     if meta is not None and meta.get("config_hash") != chash:
         raise ResultsError(
             f"{run_dir} was run with config hash {meta.get('config_hash')}, but this config "
@@ -172,6 +200,14 @@ def run_benchmark(
                 "machine": _machine(),
                 "sessions": [],
             }
+        meta["packed_draws"] = {**meta.get("packed_draws", {}), **draws}
+        redrawn = sorted(k for k, v in draws.items() if v["rejected"])
+        if redrawn and progress:
+            print(
+                f"packed round(s) {redrawn} redrawn: their first draws cannot be placed apart "
+                f"(packed_draws in {RUN_FILE}, detail in rounds.csv)",
+                file=sys.stderr,
+            )
         kept = store.prepare(retry_errors=retry_errors)
         done = store.done_keys
         pending = [s for s in specs if s.key not in done]

@@ -8,7 +8,10 @@ Seed derivation (documented contract; changing it changes every result):
 - isolated trial ``index`` (0-based) of ``object``: ``object`` is the object name;
 - packed round ``index``: ``object`` is ``"round"``; the round's objects are drawn, without
   replacement and listed in the order of ``packed.objects``, by
-  ``np.random.default_rng(derive_seed(base_seed, "packed", "draw", index))``.
+  ``np.random.default_rng(derive_seed(base_seed, "packed", "draw", index))``. When a placement
+  check is given (the backend's ``placeable``), a draw that cannot be placed apart with the
+  round's seed is rejected and the *same* generator draws again, up to ``packed.max_draws``
+  draws; the first draw is unchanged, so rounds that were placeable keep their objects.
 
 The planner is deliberately *not* part of the seed: every planner meets the same poses and the
 same rounds, so planners are compared on paired trials. Seeds are 31-bit so that any consumer
@@ -18,7 +21,7 @@ same rounds, so planners are compared on paired trials. Seeds are 31-bit so that
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -27,6 +30,9 @@ import numpy as np
 from hsqbench.experiment.config import EXPERIMENTS, ExperimentConfig
 
 Experiment = Literal["isolated", "packed"]
+
+#: Whether a packed draw can be placed apart: ``(objects, round seed) -> bool``.
+Placeable = Callable[[tuple[str, ...], int], bool]
 
 
 def derive_seed(base_seed: int, experiment: str, obj: str, index: int) -> int:
@@ -47,6 +53,18 @@ class TrialSpec:
     index: int
     objects: tuple[str, ...]
     seed: int
+    rejected_draws: tuple[tuple[str, ...], ...] = ()
+
+    @property
+    def draw_note(self) -> str:
+        """How a packed round's objects were drawn, in words, when not by the first draw."""
+        if not self.rejected_draws:
+            return ""
+        listed = " | ".join(";".join(d) for d in self.rejected_draws)
+        return (
+            f"redrawn: {len(self.rejected_draws)} draw(s) could not be placed apart and were "
+            f"replaced ({listed})"
+        )
 
     @property
     def key(self) -> str:
@@ -58,28 +76,84 @@ class TrialSpec:
         return f"{self.experiment}/{self.planner}/s{self.base_seed}/{where}"
 
 
+class PackedDrawError(ValueError):
+    """No draw of a packed round could be placed within ``packed.max_draws`` draws."""
+
+
+@dataclass(frozen=True)
+class PackedDraw:
+    """The objects of a packed round and the draws rejected before them (in draw order)."""
+
+    objects: tuple[str, ...]
+    rejected: tuple[tuple[str, ...], ...] = ()
+
+
+def _draw(rng: np.random.Generator, pool: tuple[str, ...], per_round: int) -> tuple[str, ...]:
+    chosen = np.sort(rng.choice(len(pool), size=per_round, replace=False))
+    return tuple(pool[i] for i in chosen)
+
+
 def packed_round_objects(
     pool: tuple[str, ...], per_round: int, base_seed: int, index: int
 ) -> tuple[str, ...]:
-    """The objects of packed round ``index``: ``per_round`` distinct objects of ``pool``."""
+    """The first draw of packed round ``index``: ``per_round`` distinct objects of ``pool``."""
     rng = np.random.default_rng(derive_seed(base_seed, "packed", "draw", index))
-    chosen = np.sort(rng.choice(len(pool), size=per_round, replace=False))
-    return tuple(pool[i] for i in chosen)
+    return _draw(rng, pool, per_round)
+
+
+def draw_packed_round(
+    pool: tuple[str, ...],
+    per_round: int,
+    base_seed: int,
+    index: int,
+    placeable: Placeable | None = None,
+    max_draws: int = 1,
+) -> PackedDraw:
+    """The objects of packed round ``index``: the first draw that ``placeable`` accepts.
+
+    Draws come one after another from the round's generator (see the module docstring);
+    ``placeable`` is asked with the round's seed, the seed its scene is built with, so an
+    accepted draw is one the scene builder places. ``None`` accepts the first draw.
+
+    Raises:
+        PackedDrawError: none of ``max_draws`` draws is placeable.
+    """
+    if max_draws < 1:
+        raise ValueError(f"max_draws must be >= 1, got {max_draws}")
+    rng = np.random.default_rng(derive_seed(base_seed, "packed", "draw", index))
+    seed = derive_seed(base_seed, "packed", "round", index)
+    rejected: list[tuple[str, ...]] = []
+    for _ in range(max_draws):
+        objects = _draw(rng, pool, per_round)
+        # A set drawn again gets the same answer (same seed): no second check.
+        if objects not in rejected and (placeable is None or placeable(objects, seed)):
+            return PackedDraw(objects, tuple(rejected))
+        rejected.append(objects)
+    raise PackedDrawError(
+        f"packed round {index} (base seed {base_seed}): none of {max_draws} draws of "
+        f"{per_round} objects can be placed apart in the workspace (first: {';'.join(rejected[0])}); "
+        "raise packed.max_draws, lower packed.objects_per_round, or enlarge workspace.size_m "
+        "in the scene config"
+    )
 
 
 def build_trials(
     config: ExperimentConfig,
     planners: Iterable[str] | None = None,
     experiments: Iterable[str] | None = None,
+    placeable: Placeable | None = None,
 ) -> list[TrialSpec]:
     """Every trial of ``config``, optionally restricted to some planners and experiments.
 
     The order is deterministic: base seed, then trial, then planner, so that a partial run has
     covered all planners on the same trials (paired data), and the packed rounds come after the
-    isolated trials of the same seed.
+    isolated trials of the same seed. Each packed round is drawn once, here, for all planners
+    (:func:`draw_packed_round` with ``placeable``, the backend's placement check; None: no
+    check, the first draw).
 
     Raises:
         ValueError: a requested planner or experiment is not in the config (or is disabled).
+        PackedDrawError: a packed round has no placeable draw within ``packed.max_draws``.
     """
     planners = tuple(config.planners if planners is None else planners)
     unknown = [p for p in planners if p not in config.planners]
@@ -107,7 +181,12 @@ def build_trials(
         if "packed" in experiments:
             pk = config.packed
             for i in range(pk.rounds):
-                objs = packed_round_objects(pk.objects, pk.objects_per_round, base, i)
+                draw = draw_packed_round(
+                    pk.objects, pk.objects_per_round, base, i, placeable, pk.max_draws
+                )
                 seed = derive_seed(base, "packed", "round", i)
-                specs.extend(TrialSpec("packed", p, base, i, objs, seed) for p in planners)
+                specs.extend(
+                    TrialSpec("packed", p, base, i, draw.objects, seed, draw.rejected)
+                    for p in planners
+                )
     return specs
