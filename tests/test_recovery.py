@@ -18,6 +18,7 @@ from hsqbench.planner import (
 )
 from hsqbench.planner.config import RecoveryConfig, load_planner_config
 from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.planner.recovery import surface_spacing
 from hsqbench.superquadric import Superquadric, alpha_beta, point_to_surface_alpha
 from tests.shapes import (
     add_noise_and_outliers,
@@ -139,7 +140,7 @@ def test_hidden_superquadrics_find_every_part(make) -> None:
         y = voxel_downsample(cloud, cfg.k_count_voxel_m)
         y_points = y.points[np.unique(y.inverse[h.inliers])]
         alpha, beta = alpha_beta(
-            y_points, h.superquadric, cfg.surface_spacing_m, cfg.coverage_distance_m
+            y_points, h.superquadric, surface_spacing(h.superquadric, cfg), cfg.coverage_distance_m
         )
         assert (h.alpha, h.beta) == (alpha, beta) and 0.0 < h.beta <= 1.0
         assert h.sigma_m > 0.0 and np.isfinite(h.cost)
@@ -196,6 +197,21 @@ def test_no_two_results_are_duplicates() -> None:
             assert inter < cfg.duplicate_iou * union
     everything = recover_hidden_superquadrics(cloud, RecoveryConfig(duplicate_iou=1.0))
     assert len(everything) > len(hidden)
+
+
+def test_surface_sampling_of_large_fits_is_capped() -> None:
+    """Object-sized fits get the configured spacing; a whole-scene fit a coarser one whose S
+    holds at most ``max_surface_samples`` samples."""
+    cfg = RecoveryConfig()
+    box = Superquadric(0.1, 0.1, [0.08, 0.1, 0.03])  # about the YCB cracker box
+    assert surface_spacing(box, cfg) == cfg.surface_spacing_m
+    scene = Superquadric(0.5, 0.5, [0.25, 0.2, 0.06])
+    spacing = surface_spacing(scene, cfg)
+    assert spacing > cfg.surface_spacing_m
+    samples, _ = scene.sample_surface(spacing)
+    assert len(samples) <= cfg.max_surface_samples
+    fine, _ = scene.sample_surface(cfg.surface_spacing_m)
+    assert len(fine) > 3 * cfg.max_surface_samples
 
 
 # ----------------------------------------------------------------------------- bad input

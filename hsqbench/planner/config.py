@@ -54,7 +54,8 @@ class RecoveryConfig:
     hidden_sigma_decay: float = 0.7
     # Outputs.
     inlier_threshold: float = 0.5
-    surface_spacing_m: float = 0.002
+    surface_spacing_m: float = 0.003
+    max_surface_samples: int = 12000
     coverage_distance_m: float = 0.004
 
     def __post_init__(self) -> None:
@@ -75,6 +76,8 @@ class RecoveryConfig:
                 raise ValueError(f"{name} must lie in (0, 1), got {getattr(self, name)}")
         if not 0.0 < self.eps_min < self.eps_max <= 2.0:
             raise ValueError(f"need 0 < eps_min < eps_max <= 2, got {self.eps_min}, {self.eps_max}")
+        if self.max_surface_samples < 100:
+            raise ValueError(f"max_surface_samples must be >= 100, got {self.max_surface_samples}")
         if self.max_fit_points < 11 or self.max_parts < 1 or self.em_max_iterations < 1:
             raise ValueError("max_fit_points >= 11, max_parts >= 1, em_max_iterations >= 1")
         if not 0.0 <= self.hidden_sigma_decay < 1.0:

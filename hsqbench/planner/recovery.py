@@ -276,6 +276,26 @@ def _duplicate_test(
     return test
 
 
+def surface_spacing(sq: Superquadric, cfg: RecoveryConfig) -> float:
+    """Spacing of the surface sampling S for alpha and beta, metres: ``surface_spacing_m``, or
+    coarser so that S holds at most about ``max_surface_samples`` samples.
+
+    The bound uses the area of the bounding box, ``8 (ax ay + ay az + az ax)``, which exceeds
+    the surface's (by 1.9x for an ellipsoid), so with the default cap YCB-sized fits keep
+    ``surface_spacing_m`` and only larger ones (the whole-scene fits of packed scenes, whose S
+    would otherwise hold 50 000 samples and cost more than all the fits together) get coarser.
+    """
+    a = sq.scale
+    box_area = 8.0 * float(a[0] * a[1] + a[1] * a[2] + a[2] * a[0])
+    return max(cfg.surface_spacing_m, float(np.sqrt(box_area / cfg.max_surface_samples)))
+
+
+def fit_measures(y: Array, sq: Superquadric, cfg: RecoveryConfig) -> tuple[float, float]:
+    """The paper's alpha and beta of ``sq`` for its inliers ``y`` (N, 3), metres, with S sampled
+    at :func:`surface_spacing` and beta's distance ``coverage_distance_m``."""
+    return alpha_beta(y, sq, surface_spacing(sq, cfg), cfg.coverage_distance_m)
+
+
 def recover_hidden_superquadrics(
     points: ArrayLike,
     config: RecoveryConfig | None = None,
@@ -298,8 +318,7 @@ def recover_hidden_superquadrics(
     (same grasps, same scores), and stopping it early pays for the extra seeds.
 
     The inliers Y of a result are the input points whose voxel posterior exceeds
-    ``inlier_threshold``. Alpha and beta (at ``surface_spacing_m`` and ``coverage_distance_m``)
-    are computed on Y at the paper's sensor density: on the centroids of the
+    ``inlier_threshold``. Alpha and beta (:func:`fit_measures`) are computed on Y at the paper's sensor density: on the centroids of the
     ``k_count_voxel_m`` voxels that hold points of Y. On our perception's clouds (already 2 mm)
     that is nearly Y itself; a denser cloud (500 000 points of one object) would otherwise cost a
     KD-tree of all its points per result, and weigh dense regions more. A fit with fewer than
@@ -344,6 +363,6 @@ def recover_hidden_superquadrics(
         done.append(inlier_voxels)
         sq = res.state.to_superquadric()
         y = sensor.points[np.unique(sensor.inverse[inliers])]
-        alpha, beta = alpha_beta(y, sq, cfg.surface_spacing_m, cfg.coverage_distance_m)
+        alpha, beta = fit_measures(y, sq, cfg)
         results.append(HiddenSuperquadric(sq, inliers, alpha, beta, index, res.sigma_m, res.cost))
     return results

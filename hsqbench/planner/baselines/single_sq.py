@@ -30,8 +30,7 @@ from hsqbench.planner.api import (
 from hsqbench.planner.baselines.config import BaselinesConfig, resolve_baselines_config
 from hsqbench.planner.baselines.planner import BaselinePlanner
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.recovery import HiddenSuperquadric, fit_superquadric
-from hsqbench.superquadric import alpha_beta
+from hsqbench.planner.recovery import HiddenSuperquadric, fit_measures, fit_superquadric
 
 
 def plan_single_sq(
@@ -69,9 +68,7 @@ def plan_single_sq(
     inliers = np.flatnonzero(fit.inlier_probability > rcfg.inlier_threshold)
     sq = fit.superquadric
     if inliers.size:
-        alpha, beta = alpha_beta(
-            cloud[inliers], sq, rcfg.surface_spacing_m, rcfg.coverage_distance_m
-        )
+        alpha, beta = fit_measures(cloud[inliers], sq, rcfg)
     else:
         alpha, beta = float("inf"), 0.0
     hidden = HiddenSuperquadric(sq, inliers, alpha, beta, 0, fit.sigma_m, fit.cost)
