@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from hsqbench.config import ConfigError, from_dict, load_config, to_dict
 from hsqbench.planner import plan_grasps
-from hsqbench.planner.api import Planner, PlanningContext
+from hsqbench.planner.api import Planner, PlanningContext, resolve_config
 from hsqbench.planner.baselines.antipodal import AntipodalPlanner, plan_antipodal
 from hsqbench.planner.baselines.config import (
     AntipodalConfig,
@@ -20,6 +20,9 @@ from hsqbench.planner.baselines.config import (
     load_baselines_config,
 )
 from hsqbench.planner.baselines.single_sq import SingleSQPlanner, plan_single_sq
+from hsqbench.planner.candidates import CandidateSet
+from hsqbench.planner.cleaning import clean_cloud
+from hsqbench.planner.elimination import eliminate, unobservable_contacts
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.registry import get_planner
 from hsqbench.superquadric import point_to_surface_alpha
@@ -263,11 +266,14 @@ def test_without_a_table_roll_zero_still_approaches_from_above() -> None:
     points = seen([yawed_box(20.0)], seed=2)
     result = plan_antipodal(points, seed=0)
     lines = result.candidates.lines
-    # approach0 is world -z made perpendicular to each (horizontal) closing line.
-    np.testing.assert_allclose(
-        np.einsum("ij,ij->i", lines.approach0, lines.directions), 0.0, atol=1e-9
-    )
-    assert np.all(lines.approach0[:, 2] < -0.9)
+    # approach0 is world -z made perpendicular to each closing line (exactly its projection).
+    down = np.array([0.0, 0.0, -1.0])
+    expected = down - (lines.directions @ down)[:, None] * lines.directions
+    expected /= np.linalg.norm(expected, axis=1, keepdims=True)
+    np.testing.assert_allclose(lines.approach0, expected, atol=1e-9)
+    # The box's faces are vertical: lines tilt at most the friction cone plus the normals'
+    # error (10 deg, as above), so approach0 points well down.
+    assert np.all(lines.approach0[:, 2] < -np.cos(np.deg2rad(CONE_DEG + 10.0)))
     assert result.remaining["table"] == result.remaining["support"]
 
 
@@ -298,3 +304,75 @@ def test_settings_reach_the_sampler() -> None:
     result = plan_antipodal(points, few, support_plane=TABLE, seed=0)
     assert 0 < len(result.candidates.lines) <= 40
     assert result.candidates.n_roll == round(360.0 / cfg.antipodal.roll_step_deg)
+
+
+# ----------------------------------------------------------------------------- fairness with hsq
+PLAN_FUNCTIONS = {"single-sq": plan_single_sq, "antipodal": plan_antipodal}
+
+
+def _fresh_elimination(result, points: np.ndarray, cameras=None):
+    """The result's closing lines through the shared elimination again, on ``points``."""
+    grasp_cfg = resolve_config(BaselinesConfig().planner).grasp
+    if result.planner == "antipodal":
+        grasp_cfg = dataclasses.replace(grasp_cfg, roll_step_deg=AntipodalConfig().roll_step_deg)
+    cands = CandidateSet(result.candidates.lines, result.candidates.roll_angles)
+    eliminate(cands, points, GRIPPER, grasp_cfg, np.asarray(TABLE), 0, camera_positions=cameras)
+    return cands
+
+
+@pytest.mark.parametrize("name", ["single-sq", "antipodal"])
+def test_a_flying_pixel_in_a_finger_path_no_longer_removes_a_baseline_grasp(name) -> None:
+    cleaning = resolve_config(BaselinesConfig().planner).cleaning
+    points = seen([yawed_box(30.0)], seed=3)
+    plan = PLAN_FUNCTIONS[name]
+    clean = plan(points, support_plane=TABLE, seed=0)
+    best = clean.best
+    assert best is not None, clean.reason
+    # A flying pixel inside the best grasp's +x finger, 1.5 cm up from the closing line.
+    local = np.array([best.approach_width / 2 + GRIPPER.finger_thickness_m / 2, 0.0, -0.015])
+    pixel = best.position + best.rotation @ local
+    alone = cKDTree(points).query_ball_point(pixel, cleaning.radius_m, return_length=True)
+    assert alone < cleaning.min_neighbours  # isolated: what cleaning removes
+    noisy = np.vstack([points, pixel])
+    # The pixel would remove the grasp if it reached the shared elimination ...
+    top = int(np.nanargmax(clean.candidates.scores))
+    assert _fresh_elimination(clean, noisy).rejected_by[top] in ("collision", "sweep")
+    # ... but the baseline cleans it away, as hsq does: the same grasps as without it.
+    result = get_planner(name).plan(noisy, PlanningContext(support_plane=TABLE, seed=0))
+    assert result.n_removed >= 1 and "cleaning" in result.timings
+    assert [g.to_dict() for g in result.grasps[:20]] == [g.to_dict() for g in clean.grasps[:20]]
+
+
+@pytest.mark.parametrize("name", ["single-sq", "antipodal"])
+def test_camera_positions_waive_support_for_the_baselines_as_for_hsq(name) -> None:
+    points = seen([yawed_box(20.0)], seed=2)
+    planner = get_planner(name)
+    blind = planner.plan(points, PlanningContext(support_plane=TABLE, seed=0))
+    context = PlanningContext(support_plane=TABLE, seed=0, camera_positions=CAMERAS[:1])
+    seeing = planner.plan(points, context)
+    before, after = blind.candidates.rejected_by, seeing.candidates.rejected_by
+    assert len(before) == len(after)  # the same candidates: only the rules' verdicts differ
+    rescued = np.flatnonzero((before == "support") & (after != "support"))
+    assert rescued.size > 0 and len(seeing.grasps) > len(blind.grasps)
+    assert np.all(after[before != "support"] == before[before != "support"])
+    # Each rescued pose has a contact facing away from the camera (the hsq planner's rule) ...
+    lines = np.unique(seeing.candidates.line_index[rescued])
+    grasp_cfg = resolve_config(BaselinesConfig().planner).grasp
+    unseen = unobservable_contacts(
+        seeing.candidates, lines, CAMERAS[:1], grasp_cfg, np.asarray(TABLE)
+    )
+    assert np.all(unseen.any(axis=1))
+    # ... and the verdicts are the shared elimination's with those cameras.
+    cloud = clean_cloud(points, resolve_config(BaselinesConfig().planner).cleaning)[0]
+    again = _fresh_elimination(seeing, cloud, CAMERAS[:1])
+    np.testing.assert_array_equal(again.rejected_by, after)
+
+
+@pytest.mark.parametrize("name", ["single-sq", "antipodal"])
+def test_a_cloud_cleaning_empties_gets_the_hsq_planners_answer(name) -> None:
+    sparse = np.stack(np.meshgrid(*[np.arange(4) * 0.05] * 3), axis=-1).reshape(-1, 3)
+    result = get_planner(name).plan(sparse, PlanningContext(support_plane=TABLE))
+    hsq = plan_grasps(sparse, support_plane=TABLE)
+    assert len(result.grasps) == 0 and result.n_removed == len(sparse) == hsq.n_removed
+    assert result.reason == hsq.reason and result.reason.startswith("cleaning removed all 64")
+    assert result.planner == name

@@ -61,3 +61,12 @@ def clean_cloud(
     """The cloud without its isolated points, and the indices (into ``points``) of those kept."""
     keep = np.flatnonzero(~isolated_mask(points, config))
     return points[keep], keep
+
+
+def all_removed_reason(n_points: int, config: CleaningConfig) -> str:
+    """Why a planner has nothing to plan on when cleaning removed all ``n_points`` points."""
+    return (
+        f"cleaning removed all {n_points} points: none has {config.min_neighbours} others within "
+        f"{config.radius_m:g} m (a cloud this sparse needs a larger cleaning.radius_m, or "
+        "min_neighbours: 0)"
+    )

@@ -16,10 +16,13 @@ their published descriptions):
    gripper is rolled about it every ``roll_step_deg``; roll 0 approaches from above (along
    minus the support plane's normal, or world ``-z`` without a plane).
 
-Elimination is the hsq planner's own (:func:`hsqbench.planner.elimination.eliminate` on the
-same :class:`~hsqbench.planner.candidates.CandidateSet`): all of its rules (width, support,
-table, collision, sweep, and any added later) with the same gripper and settings, so the
-planners differ only in where the closing lines come from and how they are scored.
+Input and elimination are the hsq planner's own: isolated points are removed first
+(``cleaning:`` of the planner config, :func:`hsqbench.planner.cleaning.clean_cloud`), and
+:func:`hsqbench.planner.elimination.eliminate` runs on the same
+:class:`~hsqbench.planner.candidates.CandidateSet`: all of its rules (width, support, table,
+collision, sweep, and any added later) with the same gripper, settings and camera positions (a
+contact no camera sees needs no support), so the planners differ only in where the closing
+lines come from and how they are scored.
 
 Score (documented heuristic, in (0, 1]): ``h = h_antipodal * h_delta``,
 
@@ -44,7 +47,7 @@ from hsqbench.planner.api import (
     PlanResult,
     resolve_config,
     resolve_gripper,
-    validate_cloud,
+    validate_cameras,
     validate_plane,
 )
 from hsqbench.planner.baselines.config import (
@@ -53,7 +56,7 @@ from hsqbench.planner.baselines.config import (
     resolve_baselines_config,
 )
 from hsqbench.planner.baselines.normals import estimate_normals, orient_outward
-from hsqbench.planner.baselines.planner import BaselinePlanner
+from hsqbench.planner.baselines.planner import BaselinePlanner, clean_input
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
@@ -244,8 +247,9 @@ def plan_antipodal(
     support_plane: ArrayLike | None = None,
     seed: int | None = None,
     gripper: GripperModel | None = None,
+    camera_positions: ArrayLike | None = None,
 ) -> PlanResult:
-    """Antipodal pairs of the cloud, turned into grasps and ranked (see the module notes).
+    """Antipodal pairs of the cleaned cloud, turned into grasps and ranked (see the module notes).
 
     Args:
         points: (N, 3) cloud of the object(s), world metres, table removed.
@@ -254,19 +258,27 @@ def plan_antipodal(
         support_plane: the table ``(a, b, c, d)``, unit normal toward the free side.
         seed: for the sampled points (None = 0: deterministic by default, as hsq).
         gripper: default: the gripper of the planner config's ``grasp:`` section.
+        camera_positions: (C, 3) camera centres, metres, if known: contacts no camera can see
+            then need no support, as for hsq.
 
     Raises:
         ValueError: an empty, non-finite or badly shaped cloud, or one with fewer points than
-            ``normal_neighbours`` after downsampling; a bad plane or config.
+            ``normal_neighbours`` after cleaning and downsampling; a bad plane, camera array
+            or config.
     """
     start = time.perf_counter()
-    cloud = validate_cloud(points)
     cfg = resolve_baselines_config(config)
     acfg = cfg.antipodal
-    gcfg = resolve_config(cfg.planner).grasp
+    pcfg = resolve_config(cfg.planner)
+    gcfg = pcfg.grasp
     grip = gripper if gripper is not None else resolve_gripper(gcfg.gripper)
     plane = validate_plane(support_plane)
-    timings: dict[str, float] = {}
+    cameras = validate_cameras(camera_positions)
+    clean = clean_input(points, pcfg.cleaning)
+    if clean.points.shape[0] == 0:
+        return clean.empty_result(pcfg.cleaning, AntipodalPlanner.name)
+    cloud = clean.points
+    timings: dict[str, float] = {"cleaning": clean.seconds}
 
     tick = time.perf_counter()
     down = voxel_downsample(cloud, acfg.voxel_m).points
@@ -289,7 +301,9 @@ def plan_antipodal(
     timings["sampling"] = time.perf_counter() - tick
 
     tick = time.perf_counter()
-    report = eliminate(cands, cloud, grip, gcfg, plane, 0 if seed is None else seed)
+    report = eliminate(
+        cands, cloud, grip, gcfg, plane, 0 if seed is None else seed, camera_positions=cameras
+    )
     timings["elimination"] = time.perf_counter() - tick
 
     tick = time.perf_counter()
@@ -308,6 +322,7 @@ def plan_antipodal(
         timings=timings,
         reason="" if grasps else _no_grasp_reason(pairs, cands, report.remaining, acfg, grip, gcfg),
         planner=AntipodalPlanner.name,
+        n_removed=clean.n_removed,
     )
 
 

@@ -1,24 +1,82 @@
-"""The wiring every baseline shares behind the :class:`~hsqbench.planner.api.Planner` protocol."""
+"""The wiring every baseline shares behind the :class:`~hsqbench.planner.api.Planner` protocol,
+and the input step they share with the hsq planner (cleaning, :func:`clean_input`)."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
-from numpy.typing import ArrayLike
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from hsqbench.planner.api import PlanningContext, PlanResult, resolve_config, resolve_gripper
+from hsqbench.planner.api import (
+    PlanningContext,
+    PlanResult,
+    resolve_config,
+    resolve_gripper,
+    validate_cloud,
+)
 from hsqbench.planner.baselines.config import BaselinesConfig, resolve_baselines_config
+from hsqbench.planner.cleaning import CleaningConfig, all_removed_reason, clean_cloud
 from hsqbench.planner.gripper import GripperModel
+
+
+@dataclass(frozen=True)
+class CleanInput:
+    """A validated cloud after the hsq planner's cleaning (``cleaning:`` of the planner config).
+
+    Attributes:
+        points: (M, 3) the points kept, metres.
+        kept: (M,) their indices in the caller's cloud.
+        n_input: points the caller gave.
+        seconds: wall-clock time of validation and cleaning.
+    """
+
+    points: NDArray[np.float64]
+    kept: NDArray[np.int64]
+    n_input: int
+    seconds: float
+
+    @property
+    def n_removed(self) -> int:
+        return self.n_input - int(self.points.shape[0])
+
+    def empty_result(self, config: CleaningConfig, planner: str) -> PlanResult:
+        """The result when cleaning left no point (the hsq planner answers the same)."""
+        return PlanResult(
+            grasps=[],
+            timings={"cleaning": self.seconds, "total": self.seconds},
+            reason=all_removed_reason(self.n_input, config),
+            planner=planner,
+            n_removed=self.n_input,
+        )
+
+
+def clean_input(points: ArrayLike, config: CleaningConfig) -> CleanInput:
+    """Validate ``points`` and remove isolated points (flying pixels) as the hsq planner does
+    (:func:`~hsqbench.planner.cleaning.clean_cloud`), so that a stray point in a finger's path
+    removes a baseline's grasp no more than hsq's.
+
+    Raises:
+        ValueError: an empty, non-finite or badly shaped cloud.
+    """
+    start = time.perf_counter()
+    raw = validate_cloud(points)
+    cloud, kept = clean_cloud(raw, config)
+    return CleanInput(cloud, kept, int(raw.shape[0]), time.perf_counter() - start)
 
 
 class BaselinePlanner:
     """A baseline's plan function with its config and gripper resolved once.
 
     Subclasses set ``name`` and ``plan_function``, a callable with the signature of
-    ``plan_single_sq``: ``(points, config, *, packed, support_plane, seed, gripper)``.
-    The gripper defaults to the one named by the planner config the baselines share with hsq.
+    ``plan_single_sq``: ``(points, config, *, packed, support_plane, seed, gripper,
+    camera_positions)``. The gripper defaults to the one named by the planner config the
+    baselines share with hsq. The context reaches the baselines as it reaches hsq: the table,
+    the packed flag, the seed and the cameras (contacts none of them sees need no support).
     """
 
     name: ClassVar[str]
@@ -41,4 +99,5 @@ class BaselinePlanner:
             support_plane=context.support_plane,
             seed=context.seed,
             gripper=self.gripper,
+            camera_positions=context.camera_positions,
         )
