@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.config import resolve_config_path
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet
-from hsqbench.planner.cleaning import clean_cloud
+from hsqbench.planner.cleaning import all_removed_reason, clean_cloud
 from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_config
 from hsqbench.planner.elimination import RULE_DESCRIPTIONS, eliminate
 from hsqbench.planner.grasp import Grasp
@@ -336,11 +336,7 @@ def plan_grasps(
         return PlanResult(
             grasps=[],
             timings={"cleaning": t_cleaning, "total": time.perf_counter() - start},
-            reason=(
-                f"cleaning removed all {raw.shape[0]} points: none has "
-                f"{cfg.cleaning.min_neighbours} others within {cfg.cleaning.radius_m:g} m "
-                "(a cloud this sparse needs a larger cleaning.radius_m, or min_neighbours: 0)"
-            ),
+            reason=all_removed_reason(raw.shape[0], cfg.cleaning),
             n_removed=raw.shape[0],
         )
     start_recovery = time.perf_counter()
