@@ -47,17 +47,21 @@ class HoldConfig:
 
 @dataclass(frozen=True)
 class GraspSpec:
-    """A top-down grasp in the object frame.
+    """A grasp from above in the object frame.
 
     Attributes:
         yaw_rad: angle of the closing axis from the object's x axis, about z.
         height_m: height of the grasp centre (TCP) above the object's base.
         offset_m: (x, y) of the grasp centre in the object frame.
+        pitch_rad: tilt of the hand about the horizontal axis perpendicular to the closing axis;
+            the closing axis becomes ``cos(pitch) c + sin(pitch) z`` (``c`` the yawed horizontal
+            axis, ``z`` up) and the approach stays perpendicular to it. 0 is straight down.
     """
 
     yaw_rad: float = 0.0
     height_m: float = 0.05
     offset_m: tuple[float, float] = (0.0, 0.0)
+    pitch_rad: float = 0.0
 
 
 @dataclass
@@ -91,7 +95,11 @@ class FinderConfig:
         palm_clearance_m: height of the palm above the grasp centre.
         min_height_m: lowest grasp centre above the base (fingertips clear the table).
         max_face_tilt_m: how far the slice's ends may differ across the pad (contact faces
-            square to the closing axis, so the squeeze does not push the object sideways).
+            square to the closing axis, so the squeeze does not push the object sideways), and
+            how far its middle may move between the pad's lower and upper halves (a wall leaning
+            out of the pad plane, which the squeeze would turn; see :func:`_lean`).
+        pitch_step_rad, max_pitch_rad: tilts tried, in these steps up to this bound on either
+            side, when no straight-down grasp has square faces (the flared wall of a bowl).
     """
 
     spacing_m: float = 0.004
@@ -103,17 +111,30 @@ class FinderConfig:
     palm_clearance_m: float = 0.035
     min_height_m: float = 0.02
     max_face_tilt_m: float = 0.002
+    # 2.5 deg: a face tilted by half a step is off by 0.2 mm across a pad half (8.5 mm). 30 deg:
+    # the YCB bowl's wall leans 20 deg (its hulls 23 deg) from vertical where the pads fit.
+    pitch_step_rad: float = float(np.radians(2.5))
+    max_pitch_rad: float = float(np.radians(30.0))
 
 
 def find_top_down_grasp(obj: ObjectLike, finder: FinderConfig | None = None) -> GraspSpec:
-    """A top-down grasp on ``obj`` for the hold test, from its collision hulls.
+    """A grasp from above on ``obj`` for the hold test, from its collision hulls.
 
-    Candidates: a grid of grasp centres (x, y, z) and closing-axis yaws. The object's surface
-    samples within the pad region (|across| and |vertical| below ``pad_half_m``) form the slice
-    the pads close on; a candidate is kept when that slice is narrower than ``max_width_m``,
-    nothing else of the object lies in the fingers' path (the columns beside the slice up to the
-    open width, from the pads up to ``finger_len_m``) or under the palm, and the fingertips clear
-    the table. The grasp is centred on its slice; the one closest to the centre of mass wins.
+    Candidates: a grid of grasp centres and closing-axis yaws, first with the hand straight down.
+    In the hand's frame (u along the closing axis, v across the pads, w up the fingers) the
+    object's samples within the pad region (|v| and |w| below ``pad_half_m``) form the slice the
+    pads close on; a candidate is kept when that slice is narrower than ``max_width_m``, ends in
+    faces square to the closing axis across the pads and does not lean up them, nothing else of
+    the object lies in the fingers' path (the columns beside the slice up to the open width, from
+    the pads up to ``finger_len_m``) or under the palm, and the fingertips and palm clear the
+    table. The grasp is centred on its slice; the one closest to the centre of mass wins.
+
+    When no straight-down candidate passes, the hand is tilted about the axis across the pads
+    (``pitch_step_rad`` steps up to ``max_pitch_rad``, both ways), as an arm grasping a sloped
+    wall would: a pinch on a wall leaning out of the pad plane turns the object in the hand until
+    the wall lies flat on the pads (the YCB bowl turned 23 deg at its rim, its centre of mass
+    24 mm). Among tilted candidates the least leaning slice wins, then the closest to the centre
+    of mass.
 
     Raises:
         ValueError: when no candidate passes (the object does not fit the hand from above).
@@ -124,23 +145,46 @@ def find_top_down_grasp(obj: ObjectLike, finder: FinderConfig | None = None) -> 
     hulls = [trimesh.load(p, force="mesh") for p in obj.collision_meshes]
     pts = _solid_points(hulls, f.spacing_m)
     ext = np.asarray(obj.extents)
-    gx = np.arange(-ext[0] / 2, ext[0] / 2 + 1e-9, 2 * f.spacing_m)
-    gy = np.arange(-ext[1] / 2, ext[1] / 2 + 1e-9, 2 * f.spacing_m)
-    gz = np.arange(f.min_height_m, ext[2] - f.pad_half_m / 2, 2 * f.spacing_m)
-    best: tuple[float, GraspSpec] | None = None
+    best = _best_grasp(pts, obj, f, 0.0)
+    if best is None:
+        steps = np.arange(1, round(f.max_pitch_rad / f.pitch_step_rad) + 1) * f.pitch_step_rad
+        tilted = [_best_grasp(pts, obj, f, sign * p) for p in steps for sign in (1.0, -1.0)]
+        best = min((b for b in tilted if b is not None), key=lambda b: b[0], default=None)
+    if best is None:
+        raise ValueError(f"{obj.name}: no top-down grasp fits the hand (extents {ext.round(3)} m)")
+    return best[1]
+
+
+def _best_grasp(
+    pts: np.ndarray, obj: ObjectLike, f: FinderConfig, pitch: float
+) -> tuple[tuple[float, float], GraspSpec] | None:
+    """The best candidate with the hand at ``pitch`` (see :func:`find_top_down_grasp`), with its
+    cost (the slice's lean in metres, rounded to 0.1 mm, or 0 straight down; distance to the
+    centre of mass), or ``None``."""
+    ext = np.asarray(obj.extents)
     com = np.asarray(obj.com)
+    step = 2 * f.spacing_m
     half_open = 0.04  # the fingers start fully open (Franka Hand: 40 mm travel each)
+    cp, sp = np.cos(pitch), np.sin(pitch)
+    up = np.array([0.0, 0.0, 1.0])
+    best: tuple[tuple[float, float], GraspSpec] | None = None
     for yaw in np.arange(f.yaw_steps) * np.pi / f.yaw_steps:
-        c = np.array([np.cos(yaw), np.sin(yaw)])
-        perp = np.array([-c[1], c[0]])
-        u_all = pts[:, :2] @ c
-        v_all = pts[:, :2] @ perp
+        c = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+        perp = np.array([-c[1], c[0], 0.0])
+        x_axis, w_axis = cp * c + sp * up, -sp * c + cp * up
+        u_all, v_all, h_all = pts @ x_axis, pts @ perp, pts @ w_axis
+        if pitch == 0.0:
+            heights = np.arange(f.min_height_m, ext[2] - f.pad_half_m / 2, step)
+        else:  # the fingertip clearance below decides which heights reach too low
+            heights = np.arange(h_all.min(), h_all.max() - f.pad_half_m / 2, step)
+        gx = np.arange(-ext[0] / 2, ext[0] / 2 + 1e-9, step)
+        gy = np.arange(-ext[1] / 2, ext[1] / 2 + 1e-9, step)
         for v0 in np.unique(np.round(np.add.outer(gx * perp[0], gy * perp[1]).ravel(), 4)):
             near = np.abs(v_all - v0) < 0.05  # under the palm's footprint
-            u_n, v_n, z_n = u_all[near], v_all[near] - v0, pts[near, 2]
+            u_n, v_n, z_n = u_all[near], v_all[near] - v0, h_all[near]
             strip = np.abs(v_n) < f.pad_half_m
             u_s, v_s, z_s = u_n[strip], v_n[strip], z_n[strip]
-            for z in gz:
+            for z in heights:
                 w = z_s - z
                 slab = np.abs(w) < f.pad_half_m
                 if slab.sum() < 3:
@@ -150,8 +194,24 @@ def find_top_down_grasp(obj: ObjectLike, finder: FinderConfig | None = None) -> 
                     if width > f.max_width_m:
                         continue
                     uc = 0.5 * (umin + umax)
+                    # Lowest fingertip corner (open fingers, pad bottom) above the table, by as
+                    # much as straight down at the lowest allowed height; the palm's lower edge
+                    # (the palm region of the check below, 11 cm either side) above the table.
+                    tip_z = (
+                        uc * sp
+                        + z * cp
+                        - f.pad_half_m * cp
+                        - (half_open + f.finger_thick_m) * abs(sp)
+                    )
+                    palm_z = uc * sp + z * cp + f.palm_clearance_m * cp - 0.11 * abs(sp)
+                    if tip_z < f.min_height_m - f.pad_half_m - 1e-9 or palm_z < 0.0:
+                        continue
                     grasped = slab & (u_s >= umin) & (u_s <= umax)
-                    if not _faces_square(u_s[grasped] - uc, v_s[grasped], f.max_face_tilt_m):
+                    gu = u_s[grasped] - uc
+                    if not _faces_square(gu, v_s[grasped], f.max_face_tilt_m):
+                        continue
+                    lean = _lean(gu, w[grasped])
+                    if lean >= f.max_face_tilt_m:
                         continue
                     du = np.abs(u_s - uc)
                     in_finger_path = (
@@ -163,16 +223,20 @@ def find_top_down_grasp(obj: ObjectLike, finder: FinderConfig | None = None) -> 
                     under_palm = (z_n - z >= f.palm_clearance_m) & (np.abs(u_n - uc) < 0.11)
                     if in_finger_path.any() or under_palm.any():
                         continue
-                    centre = uc * c + v0 * perp
-                    cost = float(np.linalg.norm(np.array([*centre, z]) - com))
+                    centre = uc * x_axis + v0 * perp + z * w_axis
+                    cost = (
+                        0.0 if pitch == 0.0 else round(lean, 4),
+                        float(np.linalg.norm(centre - com)),
+                    )
                     if best is None or cost < best[0]:
                         grasp = GraspSpec(
-                            float(yaw), float(z), (float(centre[0]), float(centre[1]))
+                            float(yaw),
+                            float(centre[2]),
+                            (float(centre[0]), float(centre[1])),
+                            float(pitch),
                         )
                         best = (cost, grasp)
-    if best is None:
-        raise ValueError(f"{obj.name}: no top-down grasp fits the hand (extents {ext.round(3)} m)")
-    return best[1]
+    return best
 
 
 def _solid_points(hulls: list, spacing: float) -> np.ndarray:
@@ -207,6 +271,22 @@ def _faces_square(u: np.ndarray, v: np.ndarray, tol: float) -> bool:
     )
 
 
+def _lean(u: np.ndarray, w: np.ndarray) -> float:
+    """How far the middle of the grasped slice moves along the closing axis between its lower
+    and upper halves (``w < 0``, ``w >= 0``), in metres; infinite when a half is empty.
+
+    Both ends leaning the same way (a wall sloping out of the pad plane) meet the pads at
+    opposite edges, and the squeeze turns the object until the wall lies flat on them; a taper
+    (ends leaning opposite ways, a bottle's shoulder) leaves the middle in place and does not.
+    """
+    low, high = w < 0, w >= 0
+    if low.sum() == 0 or high.sum() == 0:
+        return float("inf")
+    mid_low = 0.5 * (u[low].min() + u[low].max())
+    mid_high = 0.5 * (u[high].min() + u[high].max())
+    return float(abs(mid_high - mid_low))
+
+
 def _clusters(u_sorted: np.ndarray, gap: float) -> list[tuple[float, float]]:
     """Runs of sorted values whose consecutive gaps are below ``gap``: (first, last) each."""
     breaks = np.flatnonzero(np.diff(u_sorted) > gap)
@@ -216,10 +296,12 @@ def _clusters(u_sorted: np.ndarray, gap: float) -> list[tuple[float, float]]:
 
 
 def _hand_pose(grasp: GraspSpec, tcp_offset_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """World pose (pos, quat) of the hand body for a top-down grasp (approach = -z)."""
+    """World pose (pos, quat) of the hand body for a grasp from above (approach = -z, tilted by
+    ``grasp.pitch_rad`` about the axis across the pads)."""
     c, s = np.cos(grasp.yaw_rad), np.sin(grasp.yaw_rad)
-    x = np.array([c, s, 0.0])
-    z = np.array([0.0, 0.0, -1.0])
+    cp, sp = np.cos(grasp.pitch_rad), np.sin(grasp.pitch_rad)
+    x = np.array([cp * c, cp * s, sp])
+    z = -np.array([-sp * c, -sp * s, cp])
     r_tcp = np.column_stack([x, np.cross(z, x), z])
     # TCP = hand * Rz(+90 deg), so hand = TCP * Rz(-90 deg): hand x = -TCP y, hand y = TCP x.
     r_hand = np.column_stack([-r_tcp[:, 1], r_tcp[:, 0], r_tcp[:, 2]])
@@ -250,7 +332,11 @@ def build_hold_rig(
     )
     p_hand, q_hand = _hand_pose(grasp, robot.tcp_offset_m)
     carrier = spec.worldbody.add_body(name="carrier", pos=list(p_hand), quat=list(q_hand))
-    carrier.add_joint(name="lift", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0.0, 0.0, -1.0])
+    r_hand = np.zeros(9)
+    mujoco.mju_quat2Mat(r_hand, q_hand)
+    # The lift is straight up in the world, also when the hand is tilted (axis in carrier frame).
+    up_in_carrier = r_hand.reshape(3, 3).T @ np.array([0.0, 0.0, 1.0])
+    carrier.add_joint(name="lift", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(up_in_carrier))
     carrier.mass = 1.0
     carrier.inertia = [0.01, 0.01, 0.01]
     carrier.explicitinertial = True
