@@ -17,9 +17,10 @@ from hsqbench.planner.baselines.antipodal import AntipodalPlanner, plan_antipoda
 from hsqbench.planner.baselines.config import (
     AntipodalConfig,
     BaselinesConfig,
+    SingleSQConfig,
     load_baselines_config,
 )
-from hsqbench.planner.baselines.single_sq import SingleSQPlanner, plan_single_sq
+from hsqbench.planner.baselines.single_sq import SingleSQPlanner, object_clusters, plan_single_sq
 from hsqbench.planner.candidates import CandidateSet
 from hsqbench.planner.cleaning import clean_cloud
 from hsqbench.planner.elimination import eliminate, unobservable_contacts
@@ -167,6 +168,54 @@ def test_single_sq_describes_an_l_worse_than_the_hidden_superquadrics() -> None:
     assert one.beta < 0.6 < max(h.beta for h in hidden)
     best_single = single.best.score if single.best else 0.0
     assert best_single < 0.5 * hsq.best.score
+
+
+def two_boxes_apart() -> tuple[Box, Box, np.ndarray]:
+    """Two 6 x 4 x 10 cm boxes with footprints 3 cm apart (a packed scene's 2 cm or more), seen
+    by both cameras, plus three stray points between them."""
+    a = Box((0.03, 0.02, 0.05), np.eye(3), np.array([0.40, -0.05, 0.05]))
+    b = Box((0.03, 0.02, 0.05), np.eye(3), np.array([0.40, 0.02, 0.05]))
+    strays = np.array([[0.40, -0.015, 0.02], [0.40, -0.015, 0.05], [0.39, -0.015, 0.08]])
+    return a, b, np.concatenate([seen([a], seed=4), seen([b], seed=5), strays])
+
+
+def test_object_clusters_split_objects_placed_apart() -> None:
+    a, b, points = two_boxes_apart()
+    groups = object_clusters(points, SingleSQConfig())
+    assert len(groups) == 2
+    for group in groups:
+        on_a = a.contains(points[group], tol=0.005)
+        on_b = b.contains(points[group], tol=0.005)
+        assert on_a.all() or on_b.all()
+    # The three strays are too few for an object; so is a lone sample the views caught at a
+    # box's bottom edge, but (nearly) every box point is in a cluster.
+    clustered = np.zeros(len(points), dtype=bool)
+    clustered[np.concatenate(groups)] = True
+    assert not clustered[-3:].any() and clustered[:-3].mean() > 0.999
+    # Linked at 4 cm, the 3 cm gap no longer separates them.
+    wide = SingleSQConfig(cluster_distance_m=0.04)
+    assert len(object_clusters(points, wide)) == 1
+
+
+def test_single_sq_fits_one_superquadric_per_object_in_packed_scenes() -> None:
+    a, b, points = two_boxes_apart()
+    packed = plan_single_sq(points, packed=True, support_plane=TABLE, seed=0)
+    assert len(packed.hidden_superquadrics) == 2 and packed.grasps, packed.reason
+    positions = np.array([g.position for g in packed.grasps])
+    inside = a.contains(positions, tol=0.002) | b.contains(positions, tol=0.002)
+    assert inside.all()
+    assert a.contains(positions, tol=0.002).any() and b.contains(positions, tol=0.002).any()
+    # Isolated, the same cloud is one object: one superquadric around both boxes.
+    whole = plan_single_sq(points, packed=False, support_plane=TABLE, seed=0)
+    assert len(whole.hidden_superquadrics) == 1
+    assert whole.hidden_superquadrics[0].superquadric.scale.max() > 0.05
+
+
+def test_cluster_settings_are_checked() -> None:
+    with pytest.raises(ConfigError, match="cluster_voxel_m"):
+        from_dict(BaselinesConfig, {"single_sq": {"cluster_voxel_m": 0.02}})
+    with pytest.raises(ConfigError, match="min_cluster_points"):
+        from_dict(BaselinesConfig, {"single_sq": {"min_cluster_points": 5}})
 
 
 # ----------------------------------------------------------------------------- antipodal

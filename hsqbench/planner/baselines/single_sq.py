@@ -13,21 +13,67 @@ known, waive support at contacts none of them sees.
 On a shape one superquadric describes (a box, a cylinder) it plans like hsq; on a composite
 shape (an L, a mug with a handle) the one superquadric envelops the parts, its axes cross air
 and its alpha is large, which is the failure the paper's hidden superquadrics address.
+
+In packed scenes the method needs one cloud per object, as the single-superquadric papers
+segment theirs: the cloud is split into Euclidean clusters (:func:`object_clusters`, objects
+are placed apart) and each cluster gets its own superquadric. Isolated clouds are one object.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from hsqbench.planner.api import PlanResult, plan_from_hidden, resolve_config
-from hsqbench.planner.baselines.config import BaselinesConfig, resolve_baselines_config
+from hsqbench.planner.baselines.config import (
+    BaselinesConfig,
+    SingleSQConfig,
+    resolve_baselines_config,
+)
 from hsqbench.planner.baselines.planner import BaselinePlanner, clean_input
+from hsqbench.planner.config import RecoveryConfig
+from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.recovery import HiddenSuperquadric, fit_measures, fit_superquadric
+
+
+def object_clusters(cloud: NDArray[np.float64], config: SingleSQConfig) -> list[NDArray[np.int64]]:
+    """Indices into ``cloud`` (N, 3) of each object: connected components of the voxel
+    centroids (``cluster_voxel_m``) linked within ``cluster_distance_m``, largest first, those
+    with fewer than ``min_cluster_points`` points left out."""
+    down = voxel_downsample(cloud, config.cluster_voxel_m)
+    pairs = cKDTree(down.points).query_pairs(config.cluster_distance_m, output_type="ndarray")
+    m = down.points.shape[0]
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
+    _, voxel_label = connected_components(graph, directed=False)
+    label = voxel_label[down.inverse]
+    sizes = np.bincount(label)
+    keep = np.flatnonzero(sizes >= config.min_cluster_points)
+    order = keep[np.argsort(-sizes[keep], kind="stable")]
+    members = np.argsort(label, kind="stable")
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    return [members[starts[c] : starts[c + 1]] for c in order]
+
+
+def _one_superquadric(
+    cloud: NDArray[np.float64], members: NDArray[np.int64], index: int, rcfg: RecoveryConfig
+) -> HiddenSuperquadric:
+    """``fit_superquadric`` on ``cloud[members]``; inliers index ``cloud``."""
+    fit = fit_superquadric(cloud[members], config=rcfg)
+    inliers = members[fit.inlier_probability > rcfg.inlier_threshold]
+    sq = fit.superquadric
+    if inliers.size:
+        alpha, beta = fit_measures(cloud[inliers], sq, rcfg)
+    else:
+        alpha, beta = float("inf"), 0.0
+    return HiddenSuperquadric(sq, inliers, alpha, beta, index, fit.sigma_m, fit.cost)
 
 
 def plan_single_sq(
@@ -40,14 +86,15 @@ def plan_single_sq(
     gripper: GripperModel | None = None,
     camera_positions: ArrayLike | None = None,
 ) -> PlanResult:
-    """One superquadric fitted to the whole (cleaned) cloud, then the hsq planner's stage two.
+    """One superquadric fitted to the whole (cleaned) cloud, or to each object of a packed
+    scene, then the hsq planner's stage two.
 
     Args:
         points: (N, 3) cloud of the object, world metres, table removed.
         config: a :class:`BaselinesConfig`, a config name or a YAML path; None: baselines.yaml
             (whose ``planner`` entry names the stage-one and stage-two settings).
-        packed: a packed scene (``h_delta`` left out); one superquadric for several objects is
-            the baseline's own weakness, not an error.
+        packed: a packed scene: ``h_delta`` left out, and one superquadric per object
+            (:func:`object_clusters`).
         support_plane: the table ``(a, b, c, d)``, unit normal toward the free side.
         seed: passed to stage two (the fit itself is deterministic).
         gripper: default: the gripper of the planner config's ``grasp:`` section.
@@ -58,37 +105,45 @@ def plan_single_sq(
         ValueError: a cloud :func:`fit_superquadric` refuses (empty, NaN, too few points,
             collinear); a bad plane, camera array or config.
 
-    ``hidden_superquadrics`` of the result holds the one fitted superquadric; its inliers
-    index ``points`` as given.
+    ``hidden_superquadrics`` of the result holds the fitted superquadric (one per object in
+    packed scenes, largest object first); their inliers index ``points`` as given.
     """
     start = time.perf_counter()
-    pcfg = resolve_config(resolve_baselines_config(config).planner)
+    bcfg = resolve_baselines_config(config)
+    pcfg = resolve_config(bcfg.planner)
     clean = clean_input(points, pcfg.cleaning)
     if clean.points.shape[0] == 0:
         return clean.empty_result(pcfg.cleaning, SingleSQPlanner.name)
     cloud = clean.points
     rcfg = pcfg.recovery
     start_recovery = time.perf_counter()
-    fit = fit_superquadric(cloud, config=rcfg)
-    inliers = np.flatnonzero(fit.inlier_probability > rcfg.inlier_threshold)
-    sq = fit.superquadric
-    if inliers.size:
-        alpha, beta = fit_measures(cloud[inliers], sq, rcfg)
-    else:
-        alpha, beta = float("inf"), 0.0
+    whole = [np.arange(cloud.shape[0])]
+    groups = object_clusters(cloud, bcfg.single_sq) if packed else whole
+    # A loop over objects (at most a handful), each fit vectorised over its points.
+    fits = [_one_superquadric(cloud, g, i, rcfg) for i, g in enumerate(groups)]
     # Inliers index the caller's cloud, not the cleaned one (as hsq's).
-    hidden = HiddenSuperquadric(sq, clean.kept[inliers], alpha, beta, 0, fit.sigma_m, fit.cost)
+    hidden = [dataclasses.replace(h, inliers=clean.kept[h.inliers]) for h in fits]
     t_recovery = time.perf_counter() - start_recovery
-    result = plan_from_hidden(
-        cloud,
-        [hidden],
-        pcfg.grasp,
-        gripper=gripper,
-        packed=packed,
-        support_plane=support_plane,
-        seed=seed,
-        camera_positions=camera_positions,
-    )
+    if not hidden:
+        result = PlanResult(
+            grasps=[],
+            timings={},
+            reason=(
+                f"no object: every cluster of the cleaned cloud has fewer than "
+                f"{bcfg.single_sq.min_cluster_points} points (single_sq.min_cluster_points)"
+            ),
+        )
+    else:
+        result = plan_from_hidden(
+            cloud,
+            hidden,
+            pcfg.grasp,
+            gripper=gripper,
+            packed=packed,
+            support_plane=support_plane,
+            seed=seed,
+            camera_positions=camera_positions,
+        )
     result.planner = SingleSQPlanner.name
     result.n_removed = clean.n_removed
     result.timings = {"cleaning": clean.seconds, "recovery": t_recovery, **result.timings}
