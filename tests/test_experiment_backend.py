@@ -76,3 +76,25 @@ def test_missing_or_incomplete_trial_runner(monkeypatch) -> None:
     monkeypatch.setitem(sys.modules, "hsqbench.sim.trial", half)
     with pytest.raises(TrialRunnerUnavailable, match="run_isolated_trial"):
         SimBackend().check(("hsq",))
+
+
+def test_fingerprint_follows_the_contents_of_the_configs_the_trial_names(tmp_path) -> None:
+    """Editing a config the trial config names (here the scene) changes the fingerprint, and
+    so the run's config hash; the planners' and the object library's configs are in it too."""
+    from hsqbench.settings import CONFIG_DIR
+
+    scene = tmp_path / "scene.yaml"
+    text = (CONFIG_DIR / "scene.yaml").read_text()
+    scene.write_text(text)
+    trial = tmp_path / "trial.yaml"
+    trial.write_text(f"scene: {scene}\n")
+    before = SimBackend(str(trial)).fingerprint()
+    assert {"scene", "robot", "physics", "perception", "planner", "baselines", "gripper"} <= set(
+        before["configs"]
+    )
+    assert "assets" in before["configs"]
+    assert SimBackend(str(trial)).fingerprint() == before
+    scene.write_text(text.replace("margin_m: 0.02 ", "margin_m: 0.03 "))
+    after = SimBackend(str(trial)).fingerprint()
+    assert after["configs"]["scene"] != before["configs"]["scene"]
+    assert after["trial_config"] == before["trial_config"]  # the trial config itself is unchanged

@@ -25,6 +25,13 @@ from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
 ERROR_DETAIL_CHARS = 600
 
 
+def _config_text(name_or_path: str) -> str:
+    """The text of a config file given by name (configs/) or path."""
+    from hsqbench.config import resolve_config_path
+
+    return resolve_config_path(name_or_path).read_text()
+
+
 class TrialRunnerUnavailable(RuntimeError):
     """The simulation trial runner cannot be imported: nothing can be run."""
 
@@ -181,14 +188,47 @@ class SimBackend:
         return self._config
 
     def fingerprint(self) -> dict[str, Any]:
+        """The trial config and the contents of every config it names (scene, robot, physics,
+        perception, the planners' and the object library's), so editing any of them changes
+        the run's config hash and a resume cannot mix results from different settings."""
         from hsqbench.config import to_dict
 
-        out = {"backend": self.name, "trial_config": to_dict(self._trial_config())}
+        tc = self._trial_config()
+        out: dict[str, Any] = {"backend": self.name, "trial_config": to_dict(tc)}
         try:
-            from hsqbench.planner.config import load_planner_config
+            from hsqbench.assets.config import load_assets_config
+            from hsqbench.planner.api import resolve_config, resolve_gripper
+            from hsqbench.planner.baselines.config import resolve_baselines_config
+            from hsqbench.sim.perception import load_perception_config
+            from hsqbench.sim.physics import load_physics_config
+            from hsqbench.sim.robot import load_robot_config
+            from hsqbench.sim.scene import load_scene_config
         except ImportError:
             return out
-        out["planner_config"] = to_dict(load_planner_config())
+        named = {
+            "scene": load_scene_config,
+            "robot": load_robot_config,
+            "physics": load_physics_config,
+            "perception": load_perception_config,
+        }
+        contents = {
+            key: to_dict(load(getattr(tc, key)))
+            for key, load in named.items()
+            if isinstance(getattr(tc, key, None), str)
+        }
+        # planner_config is handed to every planner; None means each planner's own default.
+        chosen = getattr(tc, "planner_config", None)
+        if chosen is None:
+            planner = resolve_config(None)
+            contents["planner"] = to_dict(planner)
+            contents["baselines"] = to_dict(resolve_baselines_config(None))
+        else:
+            planner = None
+            contents["planner_config_text"] = _config_text(chosen)
+        if planner is not None:
+            contents["gripper"] = to_dict(resolve_gripper(planner.grasp.gripper))
+        contents["assets"] = to_dict(load_assets_config())
+        out["configs"] = contents
         return out
 
     def check(self, planners: tuple[str, ...]) -> None:
