@@ -185,7 +185,7 @@ class TrialConfig:
     perception: str = "perception"
     surface: SurfaceSensorConfig = field(default_factory=SurfaceSensorConfig)
     planner_config: str | None = None
-    max_ranks: int = 24
+    max_ranks: int = 48
     min_cloud_points: int = 30
     execution: ExecutionConfig = field(default_factory=ExecutionConfig)
     ik: IKConfig = field(default_factory=IKConfig)
