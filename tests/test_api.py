@@ -313,3 +313,21 @@ def test_contacts_no_camera_sees_need_no_support() -> None:
     assert any(abs(g.closing_axis[0]) > 0.97 for g in planned.grasps)
     with pytest.raises(ValueError, match=r"camera_positions must be a \(C, 3\)"):
         plan_grasps(points, camera_positions=[1.0, 2.0])
+
+
+def test_context_kwargs_are_accepted_by_every_built_in_plan_function() -> None:
+    """The context hands the same keywords to hsq and the baselines; each must accept them."""
+    import inspect
+
+    from hsqbench.planner.baselines.antipodal import plan_antipodal
+    from hsqbench.planner.baselines.single_sq import plan_single_sq
+
+    cameras = np.array([[0.6, 0.8, 0.5]])
+    context = PlanningContext(
+        support_plane=(0, 0, 1, 0), packed=True, seed=4, camera_positions=cameras
+    )
+    kwargs = context.plan_kwargs()
+    assert kwargs["packed"] and kwargs["seed"] == 4 and kwargs["camera_positions"] is cameras
+    for fn in (plan_grasps, plan_single_sq, plan_antipodal):
+        params = inspect.signature(fn).parameters
+        assert set(kwargs) <= set(params), fn.__name__

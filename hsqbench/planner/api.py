@@ -106,6 +106,17 @@ class PlanningContext:
         if plane is not None:
             object.__setattr__(self, "support_plane", tuple(float(x) for x in plane))
 
+    def plan_kwargs(self) -> dict[str, Any]:
+        """The keyword arguments the built-in plan functions (:func:`plan_grasps` and the
+        baselines') take from the context: ``packed``, ``support_plane``, ``seed`` and
+        ``camera_positions``."""
+        return {
+            "packed": self.packed,
+            "support_plane": self.support_plane,
+            "seed": self.seed,
+            "camera_positions": self.camera_positions,
+        }
+
 
 @runtime_checkable
 class Planner(Protocol):
@@ -376,12 +387,4 @@ class HSQPlanner:
         )
 
     def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
-        return plan_grasps(
-            points,
-            self.config,
-            packed=context.packed,
-            support_plane=context.support_plane,
-            seed=context.seed,
-            gripper=self.gripper,
-            camera_positions=context.camera_positions,
-        )
+        return plan_grasps(points, self.config, gripper=self.gripper, **context.plan_kwargs())

@@ -93,11 +93,5 @@ class BaselinePlanner:
 
     def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
         return type(self).plan_function(
-            points,
-            self.config,
-            packed=context.packed,
-            support_plane=context.support_plane,
-            seed=context.seed,
-            gripper=self.gripper,
-            camera_positions=context.camera_positions,
+            points, self.config, gripper=self.gripper, **context.plan_kwargs()
         )
