@@ -6,7 +6,9 @@ Layout of ``results/<run>/``:
   for a trial that could not run (``attempt_index=-1``, ``n_attempts=0``).
 - ``rounds.csv``: one row per packed round, written *after* the round's attempt rows; its
   ``detail`` names the draws rejected before the round's objects, if any (not placeable).
-- ``run.json``: the full config, its hash, code version, machine, the sessions that ran and
+- ``run.json``: the full config, its hash, code version, machine (host, CPU model, cores, Python
+  and the versions of every package hsqbench depends on: :mod:`hsqbench.experiment.machine`), the
+  sessions that ran (each with its own machine record: a resume may run elsewhere) and
   ``packed_draws`` (each round's objects and rejected draws).
 
 Durability: only the parent process writes. All rows of one trial go to a file in one

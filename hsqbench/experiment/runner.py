@@ -2,14 +2,12 @@
 
 The runner owns the run folder (``results/<run>/``): it checks that a resumed run has the same
 config hash, repairs the files after a kill (see :mod:`hsqbench.experiment.results`), records
-each trial as it finishes, and shows a progress bar with the running GSR per planner.
+each trial as it finishes, and shows its progress with the running GSR per planner (a bar on a
+terminal, periodic plain lines in a log: :mod:`hsqbench.experiment.progress`).
 """
 
 from __future__ import annotations
 
-import os
-import platform
-import socket
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -21,11 +19,11 @@ from hsqbench.config import config_hash, to_dict
 from hsqbench.experiment.backend import SimBackend, TrialBackend
 from hsqbench.experiment.config import ExperimentConfig
 from hsqbench.experiment.executor import Executor, SerialExecutor
+from hsqbench.experiment.machine import machine_info
+from hsqbench.experiment.progress import RunProgress, Tally
 from hsqbench.experiment.results import (
     ATTEMPTS_FILE,
     RUN_FILE,
-    STATUS_ERROR,
-    STATUS_OK,
     ResultsError,
     ResultStore,
 )
@@ -54,41 +52,8 @@ class RunSummary:
     interrupted: bool = False
 
 
-class _Tally:
-    """Running GSR per planner (status ``ok`` attempts only) and the error count."""
-
-    def __init__(self) -> None:
-        self.success: dict[str, int] = {}
-        self.attempts: dict[str, int] = {}
-        self.errors = 0
-
-    def add(self, rows: Iterable[dict[str, str]]) -> None:
-        for row in rows:
-            if row["status"] == STATUS_ERROR:
-                self.errors += 1
-            elif row["status"] == STATUS_OK:
-                p = row["planner"]
-                self.attempts[p] = self.attempts.get(p, 0) + 1
-                self.success[p] = self.success.get(p, 0) + (row["success"] == "1")
-
-    def postfix(self) -> dict[str, str]:
-        out = {f"gsr[{p}]": f"{self.success[p] / n:.2f}" for p, n in self.attempts.items()}
-        if self.errors:
-            out["errors"] = str(self.errors)
-        return out
-
-
 def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
-
-
-def _machine() -> dict[str, Any]:
-    return {
-        "host": socket.gethostname(),
-        "platform": platform.platform(),
-        "python": sys.version.split()[0],
-        "cpus": os.cpu_count(),
-    }
 
 
 def _move_aside(run_dir: Path) -> Path:
@@ -188,6 +153,7 @@ def run_benchmark(
 
     with store.locked():
         version = code_version()
+        machine = machine_info()
         if meta is None:
             meta = {
                 "run": run_dir.name,
@@ -197,7 +163,7 @@ def run_benchmark(
                 "backend": fingerprint,
                 "code_version": version,
                 "created_at": _now(),
-                "machine": _machine(),
+                "machine": machine,
                 "sessions": [],
             }
         meta["packed_draws"] = {**meta.get("packed_draws", {}), **draws}
@@ -215,7 +181,8 @@ def run_benchmark(
         session: dict[str, Any] = {
             "started_at": _now(),
             "code_version": version,
-            "host": socket.gethostname(),
+            "host": machine["host"],
+            "machine": machine,
             "executor": executor.name,
             "jobs": getattr(executor, "jobs", None),
             "planners": list(selected_planners),
@@ -227,21 +194,10 @@ def run_benchmark(
         meta["sessions"].append(session)
         store.write_meta(meta)
 
-        tally = _Tally()
+        tally = Tally()
         selected_keys = {s.key for s in specs}
         tally.add(r for r in kept.attempts if r["trial_key"] in selected_keys)
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(
-                total=len(specs),
-                initial=summary.skipped,
-                desc=run_dir.name,
-                unit="trial",
-                dynamic_ncols=True,
-            )
-            bar.set_postfix(tally.postfix())
+        shown = RunProgress(run_dir.name, len(specs), summary.skipped, tally) if progress else None
         status = "failed"
         try:
             for trial_run in executor.run(backend, pending) if pending else ():
@@ -249,17 +205,16 @@ def run_benchmark(
                 summary.ran += 1
                 summary.errors += not trial_run.ok
                 tally.add(rows)
-                if bar is not None:
-                    bar.set_postfix(tally.postfix(), refresh=False)
-                    bar.update(1)
+                if shown is not None:
+                    shown.update()
             status = "finished"
         except KeyboardInterrupt:
             summary.interrupted = True
             status = "interrupted"
             raise
         finally:
-            if bar is not None:
-                bar.close()
+            if shown is not None:
+                shown.close()
             session.update(
                 finished_at=_now(),
                 trials_run=summary.ran,
