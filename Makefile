@@ -11,11 +11,11 @@ export PYOPENGL_PLATFORM ?= egl
 .PHONY: help install test test-slow lint format bench benchmark assets clean
 
 help:
-	@echo "make benchmark   run both experiments of the paper and write results/<run>/"
+	@echo "make benchmark   run both experiments of the paper and write results/<run>/ (CONFIG=quick ...)"
 	@echo "make test        run the test suite (fast checks, as CI does)"
-	@echo "make test-slow   run the slow checks too (all 15 YCB objects, long fits)"
+	@echo "make test-slow   run the slow checks too (every object of the library, long fits)"
 	@echo "make bench       time the planner and the trial loop (bench/)"
-	@echo "make assets      build the object library (YCB from HSQ_YCB_DIR, procedural, imported)"
+	@echo "make assets      build the whole object library (optional: benchmark builds what it needs)"
 	@echo "make lint        ruff"
 
 # The venv is (re)built when it is missing or when pyproject.toml changed since the last install.
@@ -44,15 +44,19 @@ format: $(STAMP)
 bench: $(STAMP)
 	@for f in bench/bench_*.py; do echo "== $$f"; $(PY) $$f || exit 1; done
 
-# Build the object library once (CoACD hulls, inertia, MuJoCo meshes; cached in HSQ_CACHE_DIR).
+# Build every object of the library once (CoACD hulls, inertia, MuJoCo meshes; cached in
+# HSQ_CACHE_DIR). Not needed before a benchmark, which builds exactly the objects it uses.
 assets: $(STAMP)
-	$(PY) -m hsqbench.cli assets build --jobs $(JOBS)
+	$(PY) -m hsqbench.cli assets build --all --jobs $(JOBS)
 
-# The paper's two experiments with all planners. Re-running continues the same run (--resume):
-# finished trials are kept, so a killed benchmark loses nothing. RUN=name starts another run.
-RUN ?= paper
-benchmark: $(STAMP) assets
-	$(PY) -m hsqbench.cli benchmark --config paper --run $(RUN) --jobs $(JOBS) --resume
+# A protocol's experiments (default: the paper's two) with all its planners. The command builds
+# the objects the protocol uses (and downloads missing YCB ones) before the first trial.
+# Re-running continues the same run (--resume): finished trials are kept, so a killed benchmark
+# loses nothing. RUN=name starts another run; CONFIG=quick (or a YAML path) another protocol.
+CONFIG ?= paper
+RUN ?= $(CONFIG)
+benchmark: $(STAMP)
+	$(PY) -m hsqbench.cli benchmark --config $(CONFIG) --run $(RUN) --jobs $(JOBS) --resume
 	@rm -rf results/latest && cp -r results/$(RUN) results/latest && rm -f results/latest/.lock
 	@echo "tables: results/latest/tables.md (copied from results/$(RUN))"
 

@@ -265,3 +265,55 @@ def test_unplaceable_draws_are_redrawn_recorded_and_kept_on_resume(tmp_path) -> 
         run_benchmark(SMALL, run_dir, backend=Moved(unplaceable=(first,)), resume=True)
     again = run_benchmark(SMALL, run_dir, backend=backend, resume=True, progress=False)
     assert (again.skipped, again.ran) == (N_SMALL, 0)
+
+
+def test_only_the_objects_of_the_chosen_experiments_are_prepared(tmp_path) -> None:
+    config = ExperimentConfig(
+        planners=("a",),
+        isolated=IsolatedConfig(objects=("mug", "bowl"), attempts_per_object=1),
+        packed=PackedConfig(objects=("apple", "mug", "pear"), rounds=1, objects_per_round=2),
+    )
+    backend = FakeBackend()
+    run_benchmark(config, tmp_path / "all", backend=backend, progress=False)
+    assert backend.prepared == ("mug", "bowl", "apple", "pear")
+    run_benchmark(
+        config, tmp_path / "iso", backend=backend, experiments=["isolated"], progress=False
+    )
+    assert backend.prepared == ("mug", "bowl")
+
+
+def test_an_unknown_object_stops_the_run_before_any_trial(tmp_path) -> None:
+    with pytest.raises(ValueError, match="unknown object"):
+        run_benchmark(SMALL, tmp_path / "r", backend=FakeBackend(unknown=("bowl",)), progress=False)
+    assert not (tmp_path / "r" / "attempts.csv").exists()
+
+
+def test_an_object_that_cannot_be_built_is_recorded_skipped_and_retried(tmp_path, capsys) -> None:
+    import json
+
+    run_dir = tmp_path / "r"
+    backend = FakeBackend(unbuildable=("bowl",))  # its trials would raise if they were run
+    summary = run_benchmark(SMALL, run_dir, backend=backend, progress=False)
+    assert "object 'bowl' cannot be used" in capsys.readouterr().err
+    results = load_results(run_dir)
+    errors = {r["trial_key"]: r["detail"] for r in results.attempts if r["status"] == "error"}
+    with_bowl = {s.key for s in build_trials(SMALL) if "bowl" in s.objects}
+    assert set(errors) == with_bowl and summary.errors == len(with_bowl) > 0
+    assert all(
+        "'bowl' cannot be used: fake backend: this mesh cannot be built" in d
+        for d in errors.values()
+    )
+    assert all("--retry-errors" in d for d in errors.values())
+    # Every other trial is the same as in a run where every object builds (same draws too).
+    ref = tmp_path / "ref"
+    run_benchmark(SMALL, ref, backend=FakeBackend(), progress=False)
+    kept = [r for r in _comparable(ref) if r[0] not in with_bowl]
+    assert [r for r in _comparable(run_dir) if r[0] not in with_bowl] == kept
+    meta = json.loads((run_dir / "run.json").read_text())
+    assert set(meta["sessions"][0]["unusable_objects"]) == {"bowl"}
+    # Once the object builds, --retry-errors runs exactly those trials.
+    again = run_benchmark(
+        SMALL, run_dir, backend=FakeBackend(), resume=True, retry_errors=True, progress=False
+    )
+    assert (again.ran, again.errors) == (len(with_bowl), 0)
+    assert _comparable(run_dir) == _comparable(ref)

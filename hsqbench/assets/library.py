@@ -1,6 +1,6 @@
 """The object library: every object the benchmark can place, by name.
 
-Sources: ``ycb`` (the 15 YCB objects in ``HSQ_YCB_DIR``), ``procedural`` (built-in shapes named
+Sources: ``ycb`` (the YCB objects in ``HSQ_YCB_DIR``, any number), ``procedural`` (built-in shapes named
 ``proc_*``, always available) and ``imported`` (meshes registered with ``hsqbench assets
 import``). ``get_object`` builds an object once (convex decomposition, mass properties, MuJoCo
 meshes) and afterwards loads it from the cache (``hsqbench.settings.cache_dir()``).
@@ -12,9 +12,12 @@ images made with it must credit it.
 
 from __future__ import annotations
 
+import sys
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
 from functools import cache
 from multiprocessing import get_context
 from pathlib import Path
@@ -29,6 +32,7 @@ from hsqbench.settings import cache_dir, ycb_dir
 __all__ = [
     "AssetError",
     "AssetWarning",
+    "BuildReport",
     "ObjectAsset",
     "UnknownObjectError",
     "build_objects",
@@ -37,6 +41,7 @@ __all__ = [
     "is_built",
     "object_names",
     "object_spec",
+    "prepare_objects",
     "ycb_names",
 ]
 
@@ -142,6 +147,149 @@ def _build_one(spec: ObjectSpec, config: AssetsConfig, root: Path) -> tuple[Obje
     return asset, [str(w.message) for w in caught if issubclass(w.category, AssetWarning)]
 
 
+BUILD_DIED = (
+    "the build process died (a crash in CoACD or MuJoCo, or out of memory); it was built again "
+    "alone and died again"
+)
+
+
+@dataclass
+class BuildReport:
+    """What :func:`prepare_objects` made ready: ``assets`` by name, in the order asked, and the
+    objects that ``failed`` with the reason, in one line each."""
+
+    assets: dict[str, ObjectAsset] = field(default_factory=dict)
+    failed: dict[str, str] = field(default_factory=dict)
+
+
+def _reason(exc: BaseException) -> str:
+    text = " | ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+    return f"{type(exc).__name__}: {text}"
+
+
+def _pool_pass(
+    specs: list[ObjectSpec], config: AssetsConfig, root: Path, jobs: int
+) -> Iterator[tuple[str, ObjectAsset | None, str | None, list[str]]]:
+    """Build ``specs`` in one pool of ``jobs`` processes; yields (name, asset, error, warnings)
+    as they finish, error ``None`` on success. Objects lost to a dead worker are yielded last
+    with the error ``BUILD_DIED`` (their build may not have started)."""
+    lost: list[str] = []
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn")) as pool:
+        futures = {pool.submit(_build_one, s, config, root): s.name for s in specs}
+        for future in as_completed(futures):
+            name = futures[future]
+            try:
+                asset, messages = future.result()
+            except BrokenProcessPool:
+                lost.append(name)
+                continue
+            except Exception as exc:
+                yield name, None, _reason(exc), []
+                continue
+            yield name, asset, None, messages
+    for name in lost:
+        yield name, None, BUILD_DIED, []
+
+
+def _builds(
+    specs: list[ObjectSpec], config: AssetsConfig, root: Path, jobs: int
+) -> Iterator[tuple[str, ObjectAsset | None, str | None, list[str]]]:
+    if jobs == 1:
+        for spec in specs:
+            try:
+                asset, messages = _build_one(spec, config, root)
+            except Exception as exc:
+                yield spec.name, None, _reason(exc), []
+                continue
+            yield spec.name, asset, None, messages
+        return
+    lost = []
+    for name, asset, error, messages in _pool_pass(specs, config, root, jobs):
+        if error == BUILD_DIED:
+            lost.append(name)
+        else:
+            yield name, asset, error, messages
+    by_name = {s.name: s for s in specs}
+    for name in lost:  # one at a time, so the object that kills its process is the one blamed
+        yield from _pool_pass([by_name[name]], config, root, 1)
+
+
+def prepare_objects(
+    names: Iterable[str],
+    jobs: int | None = None,
+    config: AssetsConfig | None = None,
+    progress: bool = True,
+) -> BuildReport:
+    """Load from the cache, or build, each object of ``names``; ``jobs`` builds at a time in
+    separate processes. An object that cannot be built (unreadable mesh, no hulls, MuJoCo rejects
+    it, its build process crashes) is reported in ``BuildReport.failed`` with the reason, and the
+    others are still built: one bad mesh never stops the rest.
+
+    Progress goes to stderr: a bar on a terminal, one line per object built otherwise.
+
+    Raises:
+        UnknownObjectError: a name is not in the library (a typo, or YCB meshes missing): no
+            object is built.
+    """
+    config = config or default_config()
+    names = list(dict.fromkeys(names))
+    specs = [object_spec(n, config) for n in names]
+    root = cache_dir()
+    ready: dict[str, ObjectAsset] = {}
+    todo = []
+    for spec in specs:
+        cached = load_cached(spec, config, root)
+        if cached is None:
+            todo.append(spec)
+        else:
+            ready[spec.name] = cached
+    report = BuildReport()
+    shown = _BuildProgress(len(todo), progress)
+    jobs = max(1, min(jobs or config.jobs, len(todo) or 1))
+    try:
+        for name, asset, error, messages in _builds(todo, config, root, jobs):
+            for message in messages:
+                warnings.warn(message, AssetWarning, stacklevel=2)
+            if asset is None:
+                report.failed[name] = error or "unknown error"
+            else:
+                ready[name] = asset
+            shown.update(name, asset, error)
+    finally:
+        shown.close()
+    report.assets = {n: ready[n] for n in names if n in ready}
+    return report
+
+
+class _BuildProgress:
+    """A bar on a terminal; in a log, one line per object (a bar there is one line per update)."""
+
+    def __init__(self, total: int, enabled: bool) -> None:
+        self.total, self.done, self.enabled = total, 0, enabled and total > 0
+        self.bar = None
+        if self.enabled and sys.stderr.isatty():
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc="building objects", unit="obj")
+
+    def update(self, name: str, asset: ObjectAsset | None, error: str | None) -> None:
+        self.done += 1
+        if self.bar is not None:
+            self.bar.set_postfix_str(name)
+            self.bar.update()
+        elif self.enabled:
+            what = (
+                f"built {name} in {asset.info.get('build_s', 0):.1f} s"
+                if asset is not None
+                else f"cannot build {name}: {error}"
+            )
+            print(f"objects {self.done}/{self.total}: {what}", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
 def build_objects(
     names: Iterable[str] | None = None,
     jobs: int | None = None,
@@ -152,32 +300,21 @@ def build_objects(
 
     Objects already in the cache are loaded, not rebuilt. Fallback warnings raised in worker
     processes are re-issued here as ``AssetWarning``. Returns the assets in the order of ``names``.
-    """
-    from tqdm import tqdm
 
+    Raises:
+        AssetError: some objects cannot be built (all are tried first; the message names each
+            with its reason). Use :func:`prepare_objects` to get the others anyway.
+    """
     config = config or default_config()
     names = list(object_names(config=config) if names is None else names)
-    specs = [object_spec(n, config) for n in names]
-    root = cache_dir()
-    jobs = max(1, min(jobs or config.jobs, len(specs) or 1))
-    results: dict[str, ObjectAsset] = {}
-    bar = tqdm(total=len(specs), desc="building objects", unit="obj", disable=not progress)
-    try:
-        if jobs == 1:
-            for spec in specs:
-                results[spec.name], messages = _build_one(spec, config, root)
-                for message in messages:
-                    warnings.warn(message, AssetWarning, stacklevel=2)
-                bar.update()
-        else:
-            with ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn")) as pool:
-                futures = {pool.submit(_build_one, s, config, root): s.name for s in specs}
-                for future in as_completed(futures):
-                    results[futures[future]], messages = future.result()
-                    for message in messages:
-                        warnings.warn(message, AssetWarning, stacklevel=2)
-                    bar.set_postfix_str(futures[future])
-                    bar.update()
-    finally:
-        bar.close()
-    return [results[n] for n in names]
+    report = prepare_objects(names, jobs=jobs, config=config, progress=progress)
+    if report.failed:
+        raise AssetError(failure_message(report.failed))
+    return [report.assets[n] for n in names]
+
+
+def failure_message(failed: dict[str, str]) -> str:
+    """``N object(s) cannot be built:`` then one ``  name: reason`` line each."""
+    lines = [f"{len(failed)} object(s) cannot be built:"]
+    lines += [f"  {name}: {why}" for name, why in failed.items()]
+    return "\n".join(lines)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -32,9 +33,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="only this source")
 
-    p = sub.add_parser("build", help="build objects (convex decomposition, inertia, MuJoCo meshes)")
-    p.add_argument("names", nargs="*", metavar="NAME", help="objects to build (default: all)")
-    p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="only this source")
+    p = sub.add_parser(
+        "build",
+        help="build objects (convex decomposition, inertia, MuJoCo meshes): NAME..., "
+        "--protocol CONFIG, --source SOURCE or --all",
+        description="Build objects once into the cache (HSQ_CACHE_DIR). Say which: names, the "
+        "objects of a benchmark protocol (--protocol paper), one source (--source procedural) "
+        "or the whole library (--all; minutes of CoACD per new YCB object). `hsqbench "
+        "benchmark` builds the objects of its protocol itself, so this is never required.",
+    )
+    p.add_argument("names", nargs="*", metavar="NAME", help="objects to build")
+    p.add_argument(
+        "--protocol",
+        metavar="CONFIG",
+        default=None,
+        help="the objects a benchmark protocol uses (paper, quick, ... or a YAML path)",
+    )
+    p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="every object of it")
+    p.add_argument("--all", action="store_true", help="every object of the library")
     p.add_argument("--jobs", type=int, default=None, help="objects built at once (default: config)")
 
     p = sub.add_parser(
@@ -89,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
     if action == "list":
         return _list(config, args.source)
     if action == "build":
-        return _build(config, args.names, args.source, args.jobs)
+        return _build(config, _build_selection(config, args), args.jobs)
     if action == "download":
         return _download(config, args)
     return _import(config, args)
@@ -126,20 +142,45 @@ def _list(config, source: str | None) -> int:
     return 0
 
 
-def _build(config, names: list[str], source: str | None, jobs: int | None) -> int:
+def _build_selection(config, args: argparse.Namespace) -> list[str]:
+    """The objects ``assets build`` was asked for: exactly one way of saying which."""
+    from hsqbench.assets.library import object_names
+    from hsqbench.cli import CommandError
+
+    ways = [bool(args.names), args.protocol is not None, args.all]
+    if sum(ways) > 1:
+        raise CommandError("give object names, --protocol or --all, not several of them")
+    if args.names:
+        return list(args.names)
+    if args.protocol is not None:
+        from hsqbench.experiment.config import load_experiment_config
+        from hsqbench.experiment.runner import protocol_objects
+
+        return list(protocol_objects(load_experiment_config(args.protocol)))
+    if args.all or args.source:
+        return object_names(args.source, config)
+    n = len(object_names(None, config))
+    raise CommandError(
+        "say which objects to build: names (`hsqbench assets build mug bowl`), the objects of "
+        f"a protocol (`--protocol paper`), one source (`--source procedural`), or all {n} "
+        "objects of the library (`--all`); `hsqbench assets list` shows them. `hsqbench "
+        "benchmark` builds what its protocol needs by itself."
+    )
+
+
+def _build(config, names: list[str], jobs: int | None) -> int:
     import warnings
 
-    from hsqbench.assets.library import build_objects, object_names
+    from hsqbench.assets.library import failure_message, prepare_objects
 
-    names = names or object_names(source, config)
     if not names:
         print("no objects to build")
         return 0
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("always")
-        assets = build_objects(names, jobs=jobs, config=config)
-    for a in assets:
+        report = prepare_objects(names, jobs=jobs, config=config)
+    for a in report.assets.values():
         info = a.info
         note = (
             "" if info.get("collision_method", "coacd") == "coacd" else "  (convex-hull fallback)"
@@ -148,7 +189,10 @@ def _build(config, names: list[str], source: str | None, jobs: int | None) -> in
             f"{a.name:24s} {a.source:10s} {a.mass_kg:7.3f} kg  {len(a.collision_meshes):3d} hulls  "
             f"inertia from {info.get('inertia_method', '?'):11s} built in {info.get('build_s', 0):6.1f} s{note}"
         )
-    print(f"{len(assets)} objects ready in {time.perf_counter() - start:.1f} s")
+    print(f"{len(report.assets)} objects ready in {time.perf_counter() - start:.1f} s")
+    if report.failed:
+        print(failure_message(report.failed), file=sys.stderr)
+        return 1
     return 0
 
 
@@ -199,4 +243,4 @@ def _import(config, args: argparse.Namespace) -> int:
     print(f"registered {len(specs)} object(s): {', '.join(s.name for s in specs)}")
     if args.no_build:
         return 0
-    return _build(config, [s.name for s in specs], None, args.jobs)
+    return _build(config, [s.name for s in specs], args.jobs)

@@ -50,9 +50,16 @@ class TrialBackend(Protocol):
         """Fail early, in the parent, with a clear message when trials cannot run."""
         ...
 
+    def prepare(self, objects: tuple[str, ...], jobs: int | None, progress: bool) -> dict[str, str]:
+        """Make ``objects`` ready before any trial (build them, ``jobs`` at a time), in the
+        parent. Returns the objects that cannot be used, each with the reason in one line; their
+        trials are recorded as errors without running. Raises for a name it does not know."""
+        ...
+
     def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
         """Whether a packed round of ``objects`` with ``seed`` can be set up (its objects placed
-        apart). Called in the parent while the trial list is built, so it must be cheap."""
+        apart). Called in the parent while the trial list is built, so it must be cheap; only
+        asked about objects that :meth:`prepare` made ready."""
         ...
 
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult: ...
@@ -241,6 +248,12 @@ class SimBackend:
         unknown = [p for p in planners if p not in known]
         if unknown:
             raise ValueError(f"unknown planner(s) {unknown}; known: {sorted(known)}")
+
+    def prepare(self, objects: tuple[str, ...], jobs: int | None, progress: bool) -> dict[str, str]:
+        """Build (or load from the cache) exactly these objects of the library."""
+        from hsqbench.assets.library import prepare_objects
+
+        return prepare_objects(objects, jobs=jobs, progress=progress).failed
 
     def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
         """The scene builder's own placement with the trial config's scene, without a model."""

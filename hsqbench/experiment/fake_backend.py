@@ -38,6 +38,8 @@ class FakeBackend:
     sleep_s: seconds each trial waits, to make a run long enough to kill.
     unplaceable: groups of objects that cannot be placed together: a packed draw holding all
         objects of a group is refused by :meth:`placeable` (and raises if run anyway).
+    unbuildable: objects that :meth:`prepare` reports as unusable (and whose trials raise).
+    unknown: objects that :meth:`prepare` does not know (it raises ``ValueError``).
     """
 
     success: dict[str, float] = field(default_factory=dict)
@@ -47,10 +49,13 @@ class FakeBackend:
     interrupt_after: int | None = None
     sleep_s: float = 0.0
     unplaceable: tuple[tuple[str, ...], ...] = ()
+    unbuildable: tuple[str, ...] = ()
+    unknown: tuple[str, ...] = ()
     name: str = "fake"
 
     def __post_init__(self) -> None:
         self._calls = 0
+        self.prepared: tuple[str, ...] = ()  # what the last prepare() was asked for
 
     def fingerprint(self) -> dict[str, Any]:
         return {
@@ -63,7 +68,18 @@ class FakeBackend:
     def check(self, planners: tuple[str, ...]) -> None:
         return None
 
+    def prepare(self, objects: tuple[str, ...], jobs: int | None, progress: bool) -> dict[str, str]:
+        self.prepared = tuple(objects)
+        unknown = [o for o in objects if o in self.unknown]
+        if unknown:
+            raise ValueError(f"unknown object(s) {unknown}")
+        return {
+            o: "fake backend: this mesh cannot be built" for o in objects if o in self.unbuildable
+        }
+
     def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
+        if set(objects) & set(self.unbuildable):
+            raise AssertionError(f"placeable asked about unbuildable objects {objects}")
         return not any(set(group) <= set(objects) for group in self.unplaceable)
 
     def _enter(self, what: tuple[str, ...]) -> None:
@@ -74,7 +90,7 @@ class FakeBackend:
             time.sleep(self.sleep_s)
         if any(w in self.exit_on for w in what):
             os._exit(3)
-        if any(w in self.raise_on for w in what):
+        if any(w in self.raise_on or w in self.unbuildable for w in what):
             raise RuntimeError(f"fake backend failure for {what}")
 
     def _attempt(self, rng: np.random.Generator, planner: str, target: str) -> Attempt:

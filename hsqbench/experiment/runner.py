@@ -8,6 +8,7 @@ terminal, periodic plain lines in a log: :mod:`hsqbench.experiment.progress`).
 
 from __future__ import annotations
 
+import itertools
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -16,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from hsqbench.config import config_hash, to_dict
-from hsqbench.experiment.backend import SimBackend, TrialBackend
+from hsqbench.experiment.backend import SimBackend, TrialBackend, TrialRun
 from hsqbench.experiment.config import ExperimentConfig
 from hsqbench.experiment.executor import Executor, SerialExecutor
 from hsqbench.experiment.machine import machine_info
@@ -61,6 +62,29 @@ def _move_aside(run_dir: Path) -> Path:
     target = run_dir.with_name(f"{run_dir.name}.replaced-{stamp}")
     run_dir.rename(target)
     return target
+
+
+def protocol_objects(
+    config: ExperimentConfig, experiments: Iterable[str] | None = None
+) -> tuple[str, ...]:
+    """The objects the chosen experiments (default: the enabled ones) use, in config order:
+    exactly what a run must build, no more."""
+    enabled = config.enabled_experiments()
+    chosen = enabled if experiments is None else [e for e in experiments if e in enabled]
+    names: dict[str, None] = {}
+    for exp in chosen:
+        names.update(dict.fromkeys(getattr(config, exp).objects))
+    return tuple(names)
+
+
+def unusable_error(spec: TrialSpec, unusable: dict[str, str]) -> str | None:
+    """Why the trial ``spec`` cannot run (an object that could not be made ready), else None."""
+    bad = [o for o in spec.objects if o in unusable]
+    if not bad:
+        return None
+    return "; ".join(f"object {o!r} cannot be used: {unusable[o]}" for o in bad) + (
+        " (not run; fix the object, then --resume --retry-errors)"
+    )
 
 
 def packed_draws(specs: Iterable[TrialSpec]) -> dict[str, dict[str, list]]:
@@ -111,12 +135,6 @@ def run_benchmark(
     run_dir = Path(run_dir)
     backend = backend if backend is not None else SimBackend(config.trial_config)
     executor = executor if executor is not None else SerialExecutor()
-    specs = build_trials(config, planners, experiments, backend.placeable)
-    selected_planners = tuple(dict.fromkeys(s.planner for s in specs))
-    backend.check(selected_planners)
-    fingerprint = backend.fingerprint()
-    chash = config_hash(RunIdentity(config, fingerprint))
-
     store = ResultStore(run_dir)
     meta = store.read_meta()
     has_data = meta is not None or (run_dir / ATTEMPTS_FILE).exists()
@@ -131,6 +149,28 @@ def run_benchmark(
         )
     if has_data and meta is None:
         raise ResultsError(f"{run_dir} has results but no {RUN_FILE}: choose another --run name")
+    # The selection is checked (cheaply) before any object is built.
+    first_draws = build_trials(config, planners, experiments)
+    backend.check(tuple(dict.fromkeys(s.planner for s in first_draws)))
+    jobs = 1 if isinstance(executor, SerialExecutor) else getattr(executor, "jobs", None)
+    unusable = backend.prepare(protocol_objects(config, experiments), jobs, progress)
+    for name, why in unusable.items():
+        print(
+            f"object {name!r} cannot be used and its trials are recorded as errors without "
+            f"running: {why}",
+            file=sys.stderr,
+        )
+
+    def placeable(objects: tuple[str, ...], seed: int) -> bool:
+        # A draw holding an unusable object is kept (its round becomes an error record), so
+        # the other rounds draw exactly what they draw when every object works.
+        return not unusable.keys().isdisjoint(objects) or backend.placeable(objects, seed)
+
+    specs = build_trials(config, planners, experiments, placeable)
+    selected_planners = tuple(dict.fromkeys(s.planner for s in specs))
+    fingerprint = backend.fingerprint()
+    chash = config_hash(RunIdentity(config, fingerprint))
+
     draws = packed_draws(specs)
     if meta is not None:
         changed = sorted(
@@ -189,6 +229,7 @@ def run_benchmark(
             "experiments": sorted({s.experiment for s in specs}),
             "trials_selected": summary.selected,
             "trials_skipped": summary.skipped,
+            "unusable_objects": dict(unusable),
             "status": "running",
         }
         meta["sessions"].append(session)
@@ -200,7 +241,11 @@ def run_benchmark(
         shown = RunProgress(run_dir.name, len(specs), summary.skipped, tally) if progress else None
         status = "failed"
         try:
-            for trial_run in executor.run(backend, pending) if pending else ():
+            blocked = [s for s in pending if unusable_error(s, unusable)]
+            runnable = [s for s in pending if not unusable_error(s, unusable)]
+            recorded = (TrialRun.failed(s, unusable_error(s, unusable) or "") for s in blocked)
+            ran = executor.run(backend, runnable) if runnable else ()
+            for trial_run in itertools.chain(recorded, ran):
                 rows = store.append(trial_run, chash, version)
                 summary.ran += 1
                 summary.errors += not trial_run.ok
