@@ -33,8 +33,9 @@ def oracle() -> OraclePlanner:
 
 
 def test_a_5cm_cube_is_graspable(oracle):
-    counts = feasible_grasps(SceneTruth((box("cube", [0.05] * 3),), TABLE), oracle.gripper,
-                             oracle.config, seed=0)
+    counts = feasible_grasps(
+        SceneTruth((box("cube", [0.05] * 3),), TABLE), oracle.gripper, oracle.config, seed=0
+    )
     assert counts["cube"] > 0
 
 
@@ -64,8 +65,7 @@ def test_a_neighbour_in_the_fingers_path_removes_grasps(oracle):
     # Two low walls 1 cm from the cube's sides along x leave no room for a finger there; the
     # grasps closing along y stay.
     walls = (box("w1", [0.01, 0.2, 0.03], (0.54, 0.0)), box("w2", [0.01, 0.2, 0.03], (0.46, 0.0)))
-    crowded = feasible_grasps(SceneTruth((cube, *walls), TABLE), oracle.gripper,
-                              oracle.config, 0)
+    crowded = feasible_grasps(SceneTruth((cube, *walls), TABLE), oracle.gripper, oracle.config, 0)
     assert 0 < crowded["cube"] < alone["cube"]
 
 

@@ -39,6 +39,10 @@ from hsqbench.planner.elimination import approach_openings, body_hits, line_boxe
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.truth import ObjectTruth, SceneTruth
 
+#: A facet point this close to another hull of the same object is on a joint between hulls (CoACD
+#: hulls touch along their cut planes), metres.
+JOIN_TOLERANCE_M = 1e-3
+
 
 @dataclass(frozen=True)
 class OracleConfig:
@@ -56,8 +60,9 @@ class OracleConfig:
 
     def __post_init__(self) -> None:
         if self.contact_samples < 2 or self.max_lines_per_object < 1 or self.inside_checks < 1:
-            raise ValueError("oracle: contact_samples >= 2, max_lines_per_object and "
-                             "inside_checks >= 1")
+            raise ValueError(
+                "oracle: contact_samples >= 2, max_lines_per_object and inside_checks >= 1"
+            )
         if not 0 < self.roll_step_deg <= 180 or self.obstacle_spacing_m <= 0:
             raise ValueError("oracle: roll_step_deg in (0, 180], obstacle_spacing_m > 0")
         if self.friction_coefficient <= 0:
@@ -85,11 +90,12 @@ def sample_surface(
     u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
     t = tri[pick]
     pts = t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
-    # A facet point inside another hull of the object is where two hulls overlap, not surface.
+    # A facet point inside or on another hull of the object lies where hulls overlap or meet (a
+    # decomposition's cut planes), inside the object, not on its surface.
     outer = np.ones(n, dtype=bool)
     for k, (_, eq) in enumerate(obj.facets):
         other = own[pick] != k
-        outer &= ~(other & np.all(pts @ eq[:, :3].T + eq[:, 3] < -1e-4, axis=1))
+        outer &= ~(other & np.all(pts @ eq[:, :3].T + eq[:, 3] < JOIN_TOLERANCE_M, axis=1))
     return pts[outer], nrm[pick][outer]
 
 
@@ -211,8 +217,8 @@ class OraclePlanner:
     privileged = True
 
     def __init__(self, config: OracleConfig | str | Path | None = None) -> None:
-        self.config = config if isinstance(config, OracleConfig) else load_oracle_config(
-            config or "oracle"
+        self.config = (
+            config if isinstance(config, OracleConfig) else load_oracle_config(config or "oracle")
         )
         self.gripper = resolve_gripper(resolve_config(self.config.planner_config).grasp.gripper)
 

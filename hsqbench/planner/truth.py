@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull
 
+
 @dataclass(frozen=True, eq=False)
 class ObjectTruth:
     """One object's collision hulls in the world frame.
