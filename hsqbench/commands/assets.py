@@ -154,9 +154,8 @@ def _build_selection(config, args: argparse.Namespace) -> list[str]:
         return list(args.names)
     if args.protocol is not None:
         from hsqbench.experiment.config import load_experiment_config
-        from hsqbench.experiment.runner import protocol_objects
 
-        return list(protocol_objects(load_experiment_config(args.protocol)))
+        return list(load_experiment_config(args.protocol).object_names())
     if args.all or args.source:
         return object_names(args.source, config)
     n = len(object_names(None, config))

@@ -67,14 +67,12 @@ def _move_aside(run_dir: Path) -> Path:
 def protocol_objects(
     config: ExperimentConfig, experiments: Iterable[str] | None = None
 ) -> tuple[str, ...]:
-    """The objects the chosen experiments (default: the enabled ones) use, in config order:
+    """The objects the chosen experiments (default: the enabled ones) use, in first-use order:
     exactly what a run must build, no more."""
-    enabled = config.enabled_experiments()
-    chosen = enabled if experiments is None else [e for e in experiments if e in enabled]
-    names: dict[str, None] = {}
-    for exp in chosen:
-        names.update(dict.fromkeys(getattr(config, exp).objects))
-    return tuple(names)
+    if experiments is None:
+        return config.object_names()
+    chosen = [e for e in config.enabled_experiments() if e in set(experiments)]
+    return tuple(dict.fromkeys(o for e in chosen for o in getattr(config, e).objects))
 
 
 def unusable_error(spec: TrialSpec, unusable: dict[str, str]) -> str | None:
