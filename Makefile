@@ -19,10 +19,13 @@ help:
 	@echo "make lint        ruff"
 
 # The venv is (re)built when it is missing or when pyproject.toml changed since the last install.
+# Extras: dev (tests, lint) and ray (the Ray executor, so its equivalence test runs, as in CI;
+# about 80 MB); EXTRAS=dev installs without Ray.
+EXTRAS ?= dev,ray
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[dev]"
+	$(PY) -m pip install --quiet -e ".[$(EXTRAS)]"
 	@touch $(STAMP)
 
 install: $(STAMP)

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -12,6 +16,7 @@ from hsqbench.experiment.executor import (
     LocalExecutor,
     RayExecutor,
     SerialExecutor,
+    forwarded_settings,
     make_executor,
 )
 from hsqbench.experiment.fake_backend import FakeBackend
@@ -85,14 +90,74 @@ def test_make_executor() -> None:
         make_executor("local", 0)
 
 
+def _ray():
+    """Ray, which CI installs (the `ray` extra, in `make install`): there the Ray tests must run,
+    so a missing Ray fails them; elsewhere they are skipped without it."""
+    if os.environ.get("CI"):
+        import ray
+
+        return ray
+    return pytest.importorskip("ray", reason="Ray is optional: pip install -e '.[ray]'")
+
+
 def test_ray_gives_the_same_rows(serial_run, tmp_path) -> None:
-    ray = pytest.importorskip("ray", reason="Ray is optional: pip install -e '.[ray]'")
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-    try:
-        run_dir = tmp_path / "ray"
-        backend = FakeBackend(raise_on=("apple",))
-        run_benchmark(CONFIG, run_dir, backend=backend, executor=RayExecutor(), progress=False)
-    finally:
-        ray.shutdown()
+    _ray()
+    run_dir = tmp_path / "ray"
+    backend = FakeBackend(raise_on=("apple",))
+    executor = make_executor("ray", 2)  # a private local Ray with 2 CPUs, stopped afterwards
+    run_benchmark(CONFIG, run_dir, backend=backend, executor=executor, progress=False)
     assert _rows(run_dir) == _rows(serial_run)
     assert _rows(run_dir, "rounds") == _rows(serial_run, "rounds")
+    hosts_pids = {r["worker"] for r in load_results(run_dir).attempts}
+    assert len(hosts_pids) >= 2  # Ray worker processes, not this one
+    assert f"{socket.gethostname()}:{os.getpid()}" not in hosts_pids
+
+
+def _setting(name: str) -> str | None:
+    return os.environ.get(name)
+
+
+_CLUSTER = """
+import sys, ray
+context = ray.init(address="local", num_cpus=2, include_dashboard=False)
+print(context.address_info["gcs_address"], flush=True)
+sys.stdin.read()  # hold the cluster until the test closes stdin
+ray.shutdown()
+"""
+
+
+def test_ray_on_an_existing_cluster_gives_the_same_rows(serial_run, tmp_path, monkeypatch) -> None:
+    """--address: join a cluster started elsewhere (here by another process, as `ray start
+    --head` would) and forward the settings; the rows are those of one process."""
+    _ray()
+    holder = subprocess.Popen(
+        [sys.executable, "-c", _CLUSTER], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        address = holder.stdout.readline().strip()
+        assert address, "the cluster process did not start Ray"
+        monkeypatch.setenv("HSQ_YCB_DIR", str(tmp_path))  # forwarded to the workers
+        executor = make_executor("ray", None, address)
+        assert forwarded_settings()["HSQ_YCB_DIR"] == str(tmp_path)
+        ray = _ray()
+        executor._init(ray)
+        try:
+            seen = ray.get(ray.remote(num_cpus=1)(_setting).remote("HSQ_YCB_DIR"))
+        finally:
+            ray.shutdown()
+        assert seen == str(tmp_path)  # the cluster's workers got this process's setting
+        run_dir = tmp_path / "cluster"
+        backend = FakeBackend(raise_on=("apple",))
+        run_benchmark(CONFIG, run_dir, backend=backend, executor=executor, progress=False)
+    finally:
+        holder.stdin.close()
+        holder.wait(timeout=60)
+    assert _rows(run_dir) == _rows(serial_run)
+    assert _rows(run_dir, "rounds") == _rows(serial_run, "rounds")
+
+
+def test_ray_executor_arguments() -> None:
+    with pytest.raises(ValueError, match="not both"):
+        RayExecutor(address="auto", num_cpus=2)
+    with pytest.raises(ValueError, match="--executor ray"):
+        make_executor("local", 2, "auto")

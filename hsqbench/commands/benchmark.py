@@ -33,6 +33,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
     )
     parser.add_argument(
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="with --executor ray: join the Ray cluster at ADDR (HOST:PORT printed by `ray start "
+        "--head`, or auto) instead of starting a local one; its nodes need hsqbench and the "
+        "same HSQ_* paths",
+    )
+    parser.add_argument(
         "--planners", nargs="+", default=None, metavar="NAME", help="only these planners"
     )
     parser.add_argument(
@@ -109,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError("--resume needs --run NAME (the run to continue)")
     config = load_experiment_config(args.config)
     run_dir = _run_dir(args.run, args.config)
-    executor = make_executor(args.executor, args.jobs)
+    executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)
     try:
         summary = run_benchmark(

@@ -128,29 +128,73 @@ class LocalExecutor:
                     yield TrialRun.failed(spec, WORKER_DIED)
 
 
+# Settings a trial reads from the environment: forwarded to the workers of a Ray cluster (its
+# nodes must see the same paths, e.g. on a shared file system).
+FORWARDED_SETTINGS = (
+    "HSQ_YCB_DIR",
+    "HSQ_CACHE_DIR",
+    "MENAGERIE_ROOT",
+    "MUJOCO_GL",
+    "PYOPENGL_PLATFORM",
+    "OMP_NUM_THREADS",
+)
+
+
+def forwarded_settings() -> dict[str, str]:
+    """The settings of :data:`FORWARDED_SETTINGS` that are set here."""
+    return {k: os.environ[k] for k in FORWARDED_SETTINGS if k in os.environ}
+
+
 @dataclass
 class RayExecutor:
-    """The same trials as Ray tasks (``pip install -e .[ray]``).
+    """The same trials as Ray tasks, one CPU each (``pip install -e .[ray]``).
 
-    Uses the running Ray instance, or starts one with ``ray.init(address, num_cpus)`` and stops
-    it afterwards. A remote cluster's workers need hsqbench installed and the same settings
-    (``HSQ_YCB_DIR`` ...) in their environment (Ray ``runtime_env``).
+    With ``address`` (``auto``, ``HOST:PORT`` of ``ray start --head``, or ``ray://HOST:PORT``)
+    it joins that cluster and forwards this process's settings (:data:`FORWARDED_SETTINGS`) to
+    the workers, whose nodes need hsqbench installed and the same paths. Without, it starts a
+    private local Ray with ``num_cpus`` CPUs (never joining a Ray someone else runs here).
+    Either way it disconnects afterwards; a Ray already initialised in this process is used as
+    it is.
     """
 
     address: str | None = None
     num_cpus: int | None = None
     name: str = "ray"
 
-    def run(self, backend: TrialBackend, specs: Sequence[TrialSpec]) -> Iterator[TrialRun]:
-        ray = import_ray()
-        started = False
-        if not ray.is_initialized():
+    def __post_init__(self) -> None:
+        if self.address is not None and self.num_cpus is not None:
+            raise ValueError(
+                "a Ray cluster has its own CPUs: give --address or --jobs with --executor ray, "
+                "not both"
+            )
+
+    def _init(self, ray: Any) -> None:
+        if self.address is None:
             ray.init(
-                address=self.address,
+                address="local",
                 num_cpus=self.num_cpus,
                 include_dashboard=False,
                 log_to_driver=False,
             )
+            return
+        _use_token_auth_if_available()
+        try:
+            ray.init(
+                address=self.address,
+                runtime_env={"env_vars": forwarded_settings()},
+                log_to_driver=False,
+            )
+        except ConnectionError as exc:
+            raise RuntimeError(
+                f"cannot reach a Ray cluster at {self.address!r} ({exc}); start one with "
+                "`ray start --head` and pass the address it prints (or 'auto' on its head node)"
+            ) from exc
+
+    def run(self, backend: TrialBackend, specs: Sequence[TrialSpec]) -> Iterator[TrialRun]:
+        ray = import_ray()
+        started = False
+        if not ray.is_initialized():
+            self._init(ray)
             started = True
         pending: list[Any] = []
         try:
@@ -173,6 +217,20 @@ class RayExecutor:
                 ray.shutdown()
 
 
+def _use_token_auth_if_available() -> None:
+    """Ray turns on token authentication by itself for ``address=None`` or ``"auto"`` when a
+    token exists (a cluster started by ``ray start --head`` or ``ray.init`` writes one), but not
+    for an explicit address, where the connection then fails with ``InvalidAuthToken``; do the
+    same for every address (``RAY_AUTH_MODE``, when set, is the user's explicit choice)."""
+    try:  # Ray's own step (it also refreshes Ray's cached config, which reads the mode once)
+        from ray._private.authentication.authentication_token_setup import (
+            maybe_enable_token_auth_if_token_available,
+        )
+    except ImportError:  # a Ray without token authentication
+        return
+    maybe_enable_token_auth_if_token_available(warn_if_disabled=False)
+
+
 def import_ray() -> Any:
     try:
         import ray
@@ -191,15 +249,19 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def make_executor(kind: str = "local", jobs: int | None = None) -> Executor:
-    """``local`` with ``jobs`` workers (1: in this process), or ``ray`` (``jobs`` CPUs if it starts
-    Ray itself)."""
+def make_executor(
+    kind: str = "local", jobs: int | None = None, address: str | None = None
+) -> Executor:
+    """``local`` with ``jobs`` workers (1: in this process), or ``ray``: a private local Ray of
+    ``jobs`` CPUs, or the cluster at ``address``."""
     if kind not in EXECUTORS:
         raise ValueError(f"unknown executor {kind!r}; choose from {list(EXECUTORS)}")
     if jobs is not None and jobs < 1:
         raise ValueError(f"--jobs must be >= 1, got {jobs}")
+    if address is not None and kind != "ray":
+        raise ValueError("--address is the address of a Ray cluster: use it with --executor ray")
     if kind == "ray":
         import_ray()
-        return RayExecutor(num_cpus=jobs)
+        return RayExecutor(address=address, num_cpus=jobs)
     jobs = jobs or default_jobs()
     return SerialExecutor() if jobs == 1 else LocalExecutor(jobs)
