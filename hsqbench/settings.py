@@ -2,7 +2,12 @@
 
 Settings (environment variables):
 
-- ``HSQ_YCB_DIR``: folder of YCB meshes, laid out as ``<name>/textured.obj`` with ``objects.csv``.
+- ``HSQ_YCB_DIR``: your own folder of YCB meshes, laid out as ``<name>/textured.obj`` with
+  ``objects.csv``; hsqbench reads it and never writes to it.
+- ``HSQ_DATA_DIR``: hsqbench's own data folder (default ``<repo>/assets``). Without
+  ``HSQ_YCB_DIR``, the YCB objects a command needs are downloaded into its ``ycb/`` folder.
+- ``HSQ_YCB_URL``: a mirror of the YCB archives (default: ``download.base_url`` of
+  ``configs/assets.yaml``, the official source).
 - ``MENAGERIE_ROOT``: a local MuJoCo Menagerie checkout; read by the ``mujoco_menagerie`` package.
 - ``HSQ_CACHE_DIR``: where built object assets go (default ``<repo>/assets/build``).
 - ``MUJOCO_GL``: ``egl`` for offscreen rendering on machines without a display.
@@ -25,23 +30,64 @@ class SettingError(RuntimeError):
     """A required setting is missing or points at something unusable."""
 
 
+def data_dir() -> Path:
+    """hsqbench's own data folder (``HSQ_DATA_DIR``, default ``<repo>/assets``)."""
+    return Path(os.environ.get("HSQ_DATA_DIR") or REPO_ROOT / "assets")
+
+
+def default_ycb_dir() -> Path:
+    """Where YCB objects are downloaded when ``HSQ_YCB_DIR`` is unset."""
+    return data_dir() / "ycb"
+
+
+def ycb_dir_is_set() -> bool:
+    """Whether the user points hsqbench at their own YCB folder (then nothing is downloaded)."""
+    return bool(os.environ.get("HSQ_YCB_DIR"))
+
+
+def ycb_base_url() -> str | None:
+    """``HSQ_YCB_URL``, a mirror of the YCB archives, if set."""
+    return os.environ.get("HSQ_YCB_URL") or None
+
+
+def shown_path(path: Path) -> str:
+    """``path`` as a message shows it: relative to the working folder when inside it."""
+    path = Path(path).resolve()
+    try:
+        return str(path.relative_to(Path.cwd().resolve())) or "."
+    except ValueError:
+        return str(path)
+
+
 def ycb_dir(required: bool = True) -> Path | None:
-    """The YCB source folder from ``HSQ_YCB_DIR``.
+    """The YCB source folder: ``HSQ_YCB_DIR``, else the download folder once it holds objects.
 
     Raises:
-        SettingError: when ``required`` and the variable is unset or not a folder; the message
-            names both ways to get the meshes.
+        SettingError: when ``required`` and there is none; the message names every way to get
+            the meshes.
     """
     value = os.environ.get("HSQ_YCB_DIR")
-    if value and Path(value).is_dir():
-        return Path(value).resolve()
+    if value:
+        if Path(value).is_dir():
+            return Path(value).resolve()
+        if not required:
+            return None
+        raise SettingError(
+            f"HSQ_YCB_DIR={value} is not a folder: point it at a folder of YCB meshes laid out "
+            "as <name>/textured.obj with objects.csv, or unset it to let hsqbench download the "
+            "objects it needs into its data folder"
+        )
+    folder = default_ycb_dir()
+    if (folder / "objects.csv").is_file():
+        return folder.resolve()
     if not required:
         return None
-    why = "HSQ_YCB_DIR is not set" if not value else f"HSQ_YCB_DIR={value} is not a folder"
     raise SettingError(
-        f"{why}. Either point it at a folder of YCB meshes laid out as <name>/textured.obj "
-        "with objects.csv (for example `export HSQ_YCB_DIR=../shared/ycb`), or fetch them with "
-        "`hsqbench assets download --dest DIR` and then `export HSQ_YCB_DIR=DIR`."
+        "no YCB objects yet: HSQ_YCB_DIR is not set and the download folder "
+        f"({shown_path(folder)}) is empty. `hsqbench benchmark` downloads the objects its "
+        "protocol needs by itself; `hsqbench assets download NAME... | --protocol paper | --all` "
+        "fetches them now; or `export HSQ_YCB_DIR=DIR` for your own YCB folder laid out as "
+        "<name>/textured.obj with objects.csv."
     )
 
 

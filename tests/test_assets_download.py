@@ -1,6 +1,6 @@
 """YCB download against a local HTTP server on 127.0.0.1 (hsqbench.assets.download).
 
-The archives are built in the test from one shared YCB object, in a temporary folder; nothing
+The archives are built in the test from small synthetic meshes, in the official layout; nothing
 contacts the internet.
 """
 
@@ -8,77 +8,40 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import http.server
 import io
 import os
 import tarfile
-import threading
-from pathlib import Path
 
 import pytest
 
 from hsqbench.assets.config import DownloadConfig, YcbObject, load_assets_config
-from hsqbench.assets.download import DownloadError, archive_name, download_ycb, fetch
+from hsqbench.assets.download import (
+    DownloadError,
+    archive_key,
+    archive_name,
+    download_ycb,
+    fetch,
+)
 from hsqbench.assets.ycb import read_objects_csv
+from tests.ycb_server import serve, synthetic_archive, textured_obj, ycb_object
 
-YCB = os.environ.get("HSQ_YCB_DIR")
-pytestmark = pytest.mark.skipif(not YCB or not Path(YCB).is_dir(), reason="HSQ_YCB_DIR is not set")
 SOURCE = "foam_brick"
-
-
-class _Handler(http.server.BaseHTTPRequestHandler):
-    """Serves ``server.files`` (name -> bytes), honours ``Range: bytes=N-``, logs requests."""
-
-    def do_GET(self):
-        name = self.path.rsplit("/", 1)[-1]
-        self.server.requests.append((name, self.headers.get("Range")))
-        body = self.server.files.get(name)
-        if body is None:
-            self.send_error(404, "Not Found")
-            return
-        start = 0
-        if self.headers.get("Range") and self.server.ranges:
-            start = int(self.headers["Range"].split("=")[1].rstrip("-"))
-            self.send_response(206)
-            self.send_header("Content-Range", f"bytes {start}-{len(body) - 1}/{len(body)}")
-        else:
-            self.send_response(200)
-        self.send_header("Content-Length", str(len(body) - start))
-        self.end_headers()
-        self.wfile.write(body[start:])
-
-    def log_message(self, *args):
-        pass
 
 
 @pytest.fixture
 def server():
-    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), _Handler)
-    httpd.files, httpd.requests, httpd.ranges = {}, [], True
-    thread = threading.Thread(target=httpd.serve_forever, daemon=True)
-    thread.start()
-    httpd.base_url = f"http://127.0.0.1:{httpd.server_address[1]}/data/google"
-    yield httpd
-    httpd.shutdown()
-    httpd.server_close()
+    with serve() as httpd:
+        yield httpd
 
 
 @pytest.fixture(scope="module")
 def archive() -> bytes:
-    """A .tgz laid out like the official one, made from the shared copy of SOURCE."""
-    obj = _object(SOURCE)
-    buffer = io.BytesIO()
-    with tarfile.open(fileobj=buffer, mode="w:gz", compresslevel=1) as tar:
-        for name in ("textured.obj", "textured.mtl", "texture_map.png"):
-            tar.add(Path(YCB) / SOURCE / name, arcname=f"{obj.ycb_id}_{SOURCE}/google_16k/{name}")
-        info = tarfile.TarInfo(f"{obj.ycb_id}_{SOURCE}/google_16k/kinbody.xml")  # extra, ignored
-        info.size = 3
-        tar.addfile(info, io.BytesIO(b"<x>"))
-    return buffer.getvalue()
+    """A .tgz laid out like the official one, made from a synthetic box."""
+    return synthetic_archive(SOURCE)
 
 
 def _object(name: str) -> YcbObject:
-    return next(o for o in load_assets_config().download.objects if o.name == name)
+    return ycb_object(name)
 
 
 def _config(**kwargs) -> DownloadConfig:
@@ -91,8 +54,10 @@ def test_download_writes_the_ycb_layout(tmp_path, server, archive):
     assert report.downloaded == [SOURCE] and not report.failed
     entries = read_objects_csv(tmp_path)
     assert [(e.name, e.ycb_id, e.mass_kg) for e in entries] == [(SOURCE, "061", 0.028)]
-    for name in ("textured.obj", "textured.mtl", "texture_map.png"):
-        assert (tmp_path / SOURCE / name).read_bytes() == (Path(YCB) / SOURCE / name).read_bytes()
+    with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+        for name in ("textured.obj", "textured.mtl", "texture_map.png"):
+            member = tar.extractfile(f"061_{SOURCE}/google_16k/{name}")
+            assert (tmp_path / SOURCE / name).read_bytes() == member.read()
     assert not (tmp_path / SOURCE / "kinbody.xml").exists()
     assert "CC BY 4.0" in (tmp_path / "ATTRIBUTION.md").read_text()
     assert not (tmp_path / ".download").exists()  # archive removed, no partial files left
@@ -192,3 +157,39 @@ def test_downloaded_folder_works_as_hsq_ycb_dir(tmp_path, server, archive, monke
     spec = object_spec(SOURCE)
     assert spec.mass_kg == pytest.approx(0.028)
     assert spec.mesh_path == (tmp_path / "ycb" / SOURCE / "textured.obj").resolve()
+
+
+def test_archive_keys_follow_the_official_names():
+    assert archive_key(YcbObject("cracker_box", "003", 0.411)) == "003_cracker_box"
+    assert archive_name(YcbObject("a_cups", "065-a", 0.013)) == "065-a_cups_google_16k.tgz"
+    assert archive_key(YcbObject("b_toy_airplane", "072-b", 0.114)) == "072-b_toy_airplane"
+
+
+def test_a_lettered_object_downloads_from_its_hyphenated_archive(tmp_path, server):
+    import trimesh
+
+    server.files["065-a_cups_google_16k.tgz"] = synthetic_archive(
+        "a_cups", trimesh.creation.cylinder(radius=0.03, height=0.05)
+    )
+    report = download_ycb(tmp_path, _config(), ["a_cups"], base_url=server.base_url, progress=False)
+    assert report.downloaded == ["a_cups"], report.failed
+    assert [(e.name, e.ycb_id) for e in read_objects_csv(tmp_path)] == [("a_cups", "065-a")]
+
+
+def test_progress_in_a_log_is_one_line_per_object(tmp_path, server, archive, capsys):
+    server.files[archive_name(_object(SOURCE))] = archive
+    download_ycb(tmp_path, _config(), [SOURCE, "mug"], base_url=server.base_url)
+    err = capsys.readouterr().err
+    assert "\r" not in err
+    assert err.splitlines() == [
+        "YCB 1/2: downloading 061_foam_brick_google_16k.tgz",
+        "YCB 2/2: downloading 025_mug_google_16k.tgz",
+    ]
+
+
+def test_synthetic_obj_has_a_texture_coordinate_per_vertex():
+    import trimesh
+
+    text = textured_obj(trimesh.creation.box(extents=(0.1, 0.2, 0.3)))
+    assert text.count("\nv ") == text.count("\nvt ") == 8
+    assert min(float(line.split()[3]) for line in text.splitlines() if line.startswith("v ")) == 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from hsqbench.assets.config import load_assets_config
 from hsqbench.cli import main
 from hsqbench.experiment.config import load_experiment_config
 
@@ -29,7 +30,8 @@ def test_without_names_it_says_how_to_choose(capsys, monkeypatch):
     assert main(["assets", "build"]) == 2
     err = capsys.readouterr().err
     assert "say which objects to build" in err
-    for way in ("--protocol paper", "--source procedural", "all 5 objects", "--all"):
+    n = len(load_assets_config().download.objects) + 5
+    for way in ("--protocol paper", "--source procedural", f"all {n} objects", "--all"):
         assert way in err
     assert main(["assets", "build", "proc_box", "--all"]) == 2
     assert "not several" in capsys.readouterr().err
@@ -38,14 +40,12 @@ def test_without_names_it_says_how_to_choose(capsys, monkeypatch):
 def test_names_protocol_source_and_all(monkeypatch):
     monkeypatch.delenv("HSQ_YCB_DIR", raising=False)
     assert _selection(monkeypatch, "proc_l", "proc_box") == ["proc_l", "proc_box"]
-    assert _selection(monkeypatch, "--all") == [
-        "proc_box",
-        "proc_cylinder",
-        "proc_sphere",
-        "proc_l",
-        "proc_mug",
-    ]
-    assert _selection(monkeypatch, "--source", "procedural") == _selection(monkeypatch, "--all")
+    procedural = ["proc_box", "proc_cylinder", "proc_sphere", "proc_l", "proc_mug"]
+    assert _selection(monkeypatch, "--source", "procedural") == procedural
+    # Without HSQ_YCB_DIR the YCB library is what can be downloaded (fetched before building).
+    table = [o.name for o in load_assets_config().download.objects]
+    assert _selection(monkeypatch, "--all") == table + procedural
+    assert _selection(monkeypatch, "--source", "ycb") == table
     quick = load_experiment_config("quick")
     expected = list(dict.fromkeys(quick.isolated.objects + quick.packed.objects))
     assert _selection(monkeypatch, "--protocol", "quick") == expected

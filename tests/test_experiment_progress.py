@@ -45,9 +45,9 @@ def test_plain_lines_every_n_trials_with_gsr_and_eta() -> None:
         "8/10",
         "10/10",
     ]
-    assert "GSR hsq 66.7% of 3" in lines[1]
+    assert "GSR hsq 66.7% (2/3)" in lines[1]
     assert "ETA 10s" in lines[1]  # 5 left at 2 s each
-    assert lines[-1].endswith("done") and "GSR hsq 75.0% of 8" in lines[-1]
+    assert lines[-1].endswith("done") and "GSR hsq 75.0% (6/8)" in lines[-1]
     assert "ETA unknown" in lines[0]
 
 

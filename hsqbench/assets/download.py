@@ -1,7 +1,8 @@
 """Source (b): fetch the Google 16k YCB scans (``hsqbench assets download``).
 
-Each object is the archive ``{base_url}/{ycb_id}_{name}_google_16k.tgz``, which holds
-``{ycb_id}_{name}/google_16k/textured.obj``, ``textured.mtl`` and ``texture_map.png``. The download
+Each object is the archive ``{base_url}/{key}_google_16k.tgz``, which holds
+``{key}/google_16k/textured.obj``, ``textured.mtl`` and ``texture_map.png``; the key is
+``{ycb_id}_{name}`` (``003_cracker_box``), or ``065-a_cups`` for the lettered variants. The download
 writes the layout that ``HSQ_YCB_DIR`` expects (see ``hsqbench.assets.ycb``): ``DEST/<name>/...``,
 ``DEST/objects.csv`` (name, ycb_id, mass_kg) and ``DEST/ATTRIBUTION.md``.
 
@@ -22,6 +23,7 @@ import hashlib
 import io
 import os
 import shutil
+import sys
 import tarfile
 import tempfile
 import urllib.error
@@ -57,8 +59,17 @@ class DownloadReport:
     failed: dict[str, str] = field(default_factory=dict)
 
 
+def archive_key(obj: YcbObject) -> str:
+    """The object's key in the official set: ``003_cracker_box``; lettered variants join with a
+    hyphen, ``065-a_cups`` (id ``065-a``, name ``a_cups``)."""
+    number, _, letter = obj.ycb_id.partition("-")
+    if letter and obj.name.startswith(f"{letter}_"):
+        return f"{number}-{obj.name}"
+    return f"{obj.ycb_id}_{obj.name}"
+
+
 def archive_name(obj: YcbObject) -> str:
-    return f"{obj.ycb_id}_{obj.name}_google_16k.tgz"
+    return f"{archive_key(obj)}_google_16k.tgz"
 
 
 def archive_url(base_url: str, obj: YcbObject) -> str:
@@ -134,7 +145,7 @@ def fetch(
                 unit="B",
                 unit_scale=True,
                 desc=target.name,
-                disable=not progress,
+                disable=not (progress and sys.stderr.isatty()),  # a log gets one line per object
                 leave=False,
             ) as bar,
         ):
@@ -218,6 +229,13 @@ def extract(archive: Path, obj: YcbObject, dest: Path) -> Path:
     return final
 
 
+def _write_atomic(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
 def write_objects_csv(dest: Path, objects: list[YcbObject]) -> None:
     """Write ``objects.csv`` for the objects present in ``dest`` (atomic), keeping config order."""
     rows = [o for o in objects if (dest / o.name / MESH_NAME).is_file()]
@@ -251,10 +269,17 @@ def download_ycb(
     partial = dest / PARTIAL_DIR
     partial.mkdir(exist_ok=True)
     report = DownloadReport()
-    for obj in tqdm(objects, desc="YCB objects", unit="obj", disable=not progress):
+    terminal = progress and sys.stderr.isatty()
+    for i, obj in enumerate(tqdm(objects, desc="YCB objects", unit="obj", disable=not terminal)):
         if not force and is_present(dest / obj.name):
             report.skipped.append(obj.name)
             continue
+        if progress and not terminal:
+            print(
+                f"YCB {i + 1}/{len(objects)}: downloading {archive_name(obj)}",
+                file=sys.stderr,
+                flush=True,
+            )
         archive = partial / archive_name(obj)
         try:
             if not archive.is_file():
@@ -277,7 +302,7 @@ def download_ycb(
             report.failed[obj.name] = str(exc)
     all_objects = list(config.objects)
     write_objects_csv(dest, all_objects)
-    (dest / "ATTRIBUTION.md").write_text(ATTRIBUTION.format(base_url=base_url))
+    _write_atomic(dest / "ATTRIBUTION.md", ATTRIBUTION.format(base_url=base_url))
     if partial.is_dir() and not any(partial.iterdir()):
         partial.rmdir()
     return report

@@ -1,6 +1,7 @@
 """The object library: every object the benchmark can place, by name.
 
-Sources: ``ycb`` (the YCB objects in ``HSQ_YCB_DIR``, any number), ``procedural`` (built-in shapes named
+Sources: ``ycb`` (the YCB objects in ``HSQ_YCB_DIR``, any number, or those downloaded into the
+data folder: :mod:`hsqbench.assets.on_demand`), ``procedural`` (built-in shapes named
 ``proc_*``, always available) and ``imported`` (meshes registered with ``hsqbench assets
 import``). ``get_object`` builds an object once (convex decomposition, mass properties, MuJoCo
 meshes) and afterwards loads it from the cache (``hsqbench.settings.cache_dir()``).
@@ -27,7 +28,7 @@ from hsqbench.assets.build import AssetError, AssetWarning, ObjectSpec, build_ob
 from hsqbench.assets.config import AssetsConfig, load_assets_config
 from hsqbench.assets.importer import imported_specs
 from hsqbench.assets.ycb import ycb_entries
-from hsqbench.settings import cache_dir, ycb_dir
+from hsqbench.settings import cache_dir, ycb_dir_is_set
 
 __all__ = [
     "AssetError",
@@ -57,11 +58,11 @@ def default_config() -> AssetsConfig:
 
 
 def ycb_names() -> list[str]:
-    """The YCB object names of ``HSQ_YCB_DIR`` in ``objects.csv`` order.
-
-    Raises:
-        hsqbench.settings.SettingError: ``HSQ_YCB_DIR`` is unset; the message says how to get the meshes.
-    """
+    """The YCB library: the objects of ``HSQ_YCB_DIR`` in ``objects.csv`` order or, when it is
+    unset, every object hsqbench downloads on demand (``download.objects`` of
+    ``configs/assets.yaml``, the order the download folder's ``objects.csv`` keeps)."""
+    if not ycb_dir_is_set():
+        return [o.name for o in default_config().download.objects]
     return [e.name for e in ycb_entries(required=True)]
 
 
@@ -106,11 +107,17 @@ def object_spec(name: str, config: AssetsConfig | None = None) -> ObjectSpec:
     if name in specs:
         return specs[name]
     hint = ""
-    if ycb_dir(required=False) is None and any(o.name == name for o in config.download.objects):
-        try:
-            ycb_dir(required=True)
-        except Exception as exc:  # its message says how to get the YCB meshes
-            hint = f" {name!r} is a YCB object, but {exc}"
+    if any(o.name == name for o in config.download.objects):
+        if ycb_dir_is_set():
+            hint = (
+                f" {name!r} is a YCB object that HSQ_YCB_DIR does not hold (see its "
+                "objects.csv); add it there, or unset HSQ_YCB_DIR to let hsqbench download it"
+            )
+        else:
+            hint = (
+                f" {name!r} is a YCB object not downloaded yet: `hsqbench assets download "
+                f"{name}` fetches it (a benchmark that uses it does so by itself)"
+            )
     raise UnknownObjectError(f"unknown object {name!r}; known objects: {', '.join(specs)}.{hint}")
 
 

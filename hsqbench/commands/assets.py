@@ -55,13 +55,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     p = sub.add_parser(
         "download",
-        help="fetch the Google 16k YCB scans (CC BY 4.0) into DEST for HSQ_YCB_DIR",
-        description="Fetch the Google 16k YCB scans from the official YCB source into DEST, laid "
-        "out for HSQ_YCB_DIR. The models are CC BY 4.0: DEST/ATTRIBUTION.md credits them.",
+        help="fetch Google 16k YCB scans (CC BY 4.0): NAME..., --protocol CONFIG or --all",
+        description="Fetch the Google 16k YCB scans from the official YCB source (or HSQ_YCB_URL) "
+        "into the download folder (HSQ_DATA_DIR/ycb, default assets/ycb), which hsqbench reads "
+        "when HSQ_YCB_DIR is unset; or into --dest DIR, laid out for HSQ_YCB_DIR. Commands that "
+        "need missing objects download them by themselves, so this is never required. The "
+        "models are CC BY 4.0: ATTRIBUTION.md beside them credits them.",
     )
-    p.add_argument("names", nargs="*", metavar="NAME", help="YCB objects (default: all 15)")
+    p.add_argument("names", nargs="*", metavar="NAME", help="YCB objects")
     p.add_argument(
-        "--dest", type=Path, required=True, help="folder to write (then export HSQ_YCB_DIR=DEST)"
+        "--protocol", metavar="CONFIG", default=None, help="the YCB objects a protocol uses"
+    )
+    p.add_argument(
+        "--all", action="store_true", help="every object of download.objects in the config"
+    )
+    p.add_argument(
+        "--dest",
+        type=Path,
+        default=None,
+        help="folder to write, then export HSQ_YCB_DIR=DEST (default: the download folder)",
     )
     p.add_argument(
         "--base-url", default=None, help="archive server (default: download.base_url in the config)"
@@ -98,10 +110,6 @@ def run(args: argparse.Namespace) -> int:
 
     config = load_assets_config(args.config)
     action = args.assets_command
-    if getattr(args, "source", None) == "ycb":
-        from hsqbench.settings import ycb_dir
-
-        ycb_dir(required=True)  # explains how to get the meshes when HSQ_YCB_DIR is unset
     if action == "list":
         return _list(config, args.source)
     if action == "build":
@@ -114,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
 def _list(config, source: str | None) -> int:
     from hsqbench.assets.build import load_cached
     from hsqbench.assets.library import object_names, object_spec
-    from hsqbench.settings import cache_dir, ycb_dir
+    from hsqbench.settings import cache_dir
 
     names = object_names(source, config)
     rows = [("name", "source", "mass_kg", "size_mm (x y z)", "hulls", "built")]
@@ -137,14 +145,32 @@ def _list(config, source: str | None) -> int:
         print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
     built = sum(r[-1] == "yes" for r in rows[1:])
     print(f"{len(names)} objects, {built} built (cache: {cache_dir()})")
-    if source in (None, "ycb") and ycb_dir(required=False) is None:
-        print("no YCB objects: HSQ_YCB_DIR is not set (see `hsqbench assets download --help`)")
+    if source in (None, "ycb"):
+        from hsqbench.assets.on_demand import missing_ycb
+        from hsqbench.settings import default_ycb_dir, shown_path
+
+        missing = missing_ycb([o.name for o in config.download.objects], config)
+        if missing:
+            print(
+                f"{len(missing)} more YCB objects are downloaded into "
+                f"{shown_path(default_ycb_dir())} when a command needs them (HSQ_YCB_DIR is "
+                "not set), or now with `hsqbench assets download`"
+            )
     return 0
+
+
+def _library(source: str | None, config) -> list[str]:
+    """Every object of ``source`` (default: all), YCB ones not downloaded yet included (they
+    are fetched before the build)."""
+    from hsqbench.assets.library import object_names, ycb_names
+
+    ycb = ycb_names() if source in (None, "ycb") else []
+    others = [] if source == "ycb" else object_names(source, config)
+    return list(dict.fromkeys(ycb + others))
 
 
 def _build_selection(config, args: argparse.Namespace) -> list[str]:
     """The objects ``assets build`` was asked for: exactly one way of saying which."""
-    from hsqbench.assets.library import object_names
     from hsqbench.cli import CommandError
 
     ways = [bool(args.names), args.protocol is not None, args.all]
@@ -157,8 +183,8 @@ def _build_selection(config, args: argparse.Namespace) -> list[str]:
 
         return list(load_experiment_config(args.protocol).object_names())
     if args.all or args.source:
-        return object_names(args.source, config)
-    n = len(object_names(None, config))
+        return _library(args.source, config)
+    n = len(_library(None, config))
     raise CommandError(
         "say which objects to build: names (`hsqbench assets build mug bowl`), the objects of "
         f"a protocol (`--protocol paper`), one source (`--source procedural`), or all {n} "
@@ -171,11 +197,13 @@ def _build(config, names: list[str], jobs: int | None) -> int:
     import warnings
 
     from hsqbench.assets.library import failure_message, prepare_objects
+    from hsqbench.assets.on_demand import fetch_missing
 
     if not names:
         print("no objects to build")
         return 0
     start = time.perf_counter()
+    fetch_missing(names, config)
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         report = prepare_objects(names, jobs=jobs, config=config)
@@ -197,17 +225,33 @@ def _build(config, names: list[str], jobs: int | None) -> int:
 
 def _download(config, args: argparse.Namespace) -> int:
     from hsqbench.assets.download import download_ycb
+    from hsqbench.cli import CommandError
+    from hsqbench.settings import default_ycb_dir, shown_path, ycb_base_url, ycb_dir_is_set
 
+    table = [o.name for o in config.download.objects]
+    if sum([bool(args.names), args.protocol is not None, args.all]) != 1:
+        raise CommandError(
+            "say which YCB objects to download: names (`hsqbench assets download mug bowl`), "
+            f"those of a protocol (`--protocol paper`), or all {len(table)} (`--all`)"
+        )
+    names = list(args.names) if args.names else table
+    if args.protocol is not None:
+        from hsqbench.experiment.config import load_experiment_config
+
+        used = load_experiment_config(args.protocol).object_names()
+        names = [n for n in used if n in table]
+    dest = args.dest if args.dest is not None else default_ycb_dir()
     report = download_ycb(
-        args.dest,
+        dest,
         config.download,
-        names=args.names or None,
-        base_url=args.base_url,
+        names=names,
+        base_url=args.base_url or ycb_base_url(),
         force=args.force,
         keep_archives=args.keep_archives,
     )
     print(
-        f"downloaded {len(report.downloaded)}, already present {len(report.skipped)}, failed {len(report.failed)}"
+        f"downloaded {len(report.downloaded)}, already present {len(report.skipped)}, "
+        f"failed {len(report.failed)} (in {shown_path(dest)})"
     )
     for name, why in report.failed.items():
         print(f"  {name}: {why}")
@@ -215,7 +259,10 @@ def _download(config, args: argparse.Namespace) -> int:
         raise RuntimeError(
             f"{len(report.failed)} object(s) failed; run the same command again to retry"
         )
-    print(f"now: export HSQ_YCB_DIR={os.path.abspath(args.dest)}")
+    if args.dest is not None:
+        print(f"now: export HSQ_YCB_DIR={os.path.abspath(args.dest)}")
+    elif ycb_dir_is_set():
+        print("note: HSQ_YCB_DIR is set, so hsqbench reads that folder, not this one")
     return 0
 
 

@@ -252,9 +252,12 @@ class SimBackend:
             raise ValueError(f"unknown planner(s) {unknown}; known: {sorted(known)}")
 
     def prepare(self, objects: tuple[str, ...], jobs: int | None, progress: bool) -> dict[str, str]:
-        """Build (or load from the cache) exactly these objects of the library."""
+        """Download the YCB ones missing from the download folder (only when ``HSQ_YCB_DIR`` is
+        unset), then build (or load from the cache) exactly these objects of the library."""
         from hsqbench.assets.library import prepare_objects
+        from hsqbench.assets.on_demand import fetch_missing
 
+        fetch_missing(objects, progress=progress)
         return prepare_objects(objects, jobs=jobs, progress=progress).failed
 
     def placeable(self, objects: tuple[str, ...], seed: int) -> bool:

@@ -114,7 +114,8 @@ class RunProgress:
         pct = 100.0 * self.done / self.total if self.total else 100.0
         parts = [f"{self.label}: {self.done}/{self.total} trials ({pct:.0f} %)"]
         gsr = [
-            f"{p} {self.tally.success[p] / n:.1%} of {n}" for p, n in self.tally.attempts.items()
+            f"{p} {self.tally.success[p] / n:.1%} ({self.tally.success[p]}/{n})"
+            for p, n in self.tally.attempts.items()
         ]
         if gsr:
             parts.append("GSR " + ", ".join(gsr))
