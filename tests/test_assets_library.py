@@ -194,3 +194,20 @@ def test_build_progress_in_a_log_is_one_line_per_object(fast_config, capsys):
     assert "built proc_box in" in lines[0]
     prepare_objects(["proc_box", "proc_sphere"], jobs=1, config=fast_config, progress=True)
     assert "objects" not in capsys.readouterr().err  # all cached: nothing to show
+
+
+def test_resting_poses_of_a_box_are_its_six_faces_larger_ones_likelier(fast_config):
+    import numpy as np
+
+    from hsqbench.assets.resting import FILE_NAME, resting_poses
+
+    build_objects(["proc_box"], jobs=1, config=fast_config)
+    box = get_object("proc_box", config=fast_config)
+    poses = resting_poses(box)
+    assert len(poses.probabilities) == 6
+    assert poses.probabilities.sum() == pytest.approx(1.0)
+    # Height of the box in each pose; the lower it lies, the likelier the pose.
+    heights = np.abs(poses.rotations[:, 2, :]) @ box.extents
+    assert np.all(np.diff(heights) >= -1e-6)
+    assert set(np.round(heights, 3)) == set(np.round(box.extents, 3))
+    assert (box.build_dir / FILE_NAME).exists()  # cached beside the built asset
