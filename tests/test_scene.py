@@ -20,6 +20,7 @@ from hsqbench.sim.scene import (
     packed_placeable,
     place_objects,
     rectangles_overlap,
+    world_path,
 )
 
 try:
@@ -264,8 +265,9 @@ def test_scene_command_writes_a_picture(tmp_path) -> None:
     code = main(["scene", "--kind", "isolated", "--objects", "proc_cylinder", "--png", str(out)])
     assert code == 0
     image = np.asarray(Image.open(out).convert("RGB"), dtype=float)
-    cfg = load_scene_config().viewer_camera
-    assert image.shape == (cfg.height_px, cfg.width_px, 3)
+    world = mujoco.MjModel.from_xml_path(str(world_path(load_scene_config())))
+    width, height = world.cam_resolution[world.camera(load_scene_config().viewer_camera.name).id]
+    assert image.shape == (height, width, 3)
     assert image.std() > 10.0  # a real picture, not a blank frame
 
 
@@ -281,12 +283,18 @@ def test_packed_ycb_draws_settle_apart(seed: int) -> None:
     assert _object_contacts(model, data, info) == []
 
 
-def test_config_changes_reach_the_scene() -> None:
-    cfg = load_scene_config()
-    wider = dataclasses.replace(
-        cfg, table=dataclasses.replace(cfg.table, size_m=(1.4, 1.8, cfg.table.size_m[2]))
-    )
-    model, _, info = build_scene("isolated", ["proc_box"], seed=0, scene_config=wider)
+def test_world_file_changes_reach_the_scene(tmp_path) -> None:
+    import shutil
+
+    from hsqbench.settings import SCENES_DIR
+
+    shutil.copytree(SCENES_DIR, tmp_path / "scenes")
+    table = tmp_path / "scenes" / "table.xml"
+    text = table.read_text()
+    assert 'size="0.6 0.8 0.02"' in text
+    table.write_text(text.replace('size="0.6 0.8 0.02"', 'size="0.7 0.9 0.02"'))
+    cfg = dataclasses.replace(load_scene_config(), world=str(tmp_path / "scenes" / "world.xml"))
+    model, _, info = build_scene("isolated", ["proc_box"], seed=0, scene_config=cfg)
     np.testing.assert_allclose(model.geom_size[info.table_geom_id][:2], [0.7, 0.9])
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-HELP = "build an isolated or packed scene, print what it holds, and render it to a PNG"
+HELP = "build an isolated or packed scene, print what it holds, render it to a PNG or export it as MJCF"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,6 +19,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="object names (default: drawn by seed from the 15 YCB objects)",
     )
     parser.add_argument("--png", type=Path, default=None, help="write a picture here")
+    parser.add_argument(
+        "--xml",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="write the scene as self-contained MJCF: DIR/scene.xml (settled state as keyframe "
+        "'initial') and DIR/assets/; open with `python -m mujoco.viewer --mjcf DIR/scene.xml`",
+    )
     parser.add_argument(
         "--camera",
         default=None,
@@ -45,9 +53,9 @@ def render_png(model, data, camera: str, path: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hsqbench.sim.scene import build_scene
+    from hsqbench.sim.scene import build_scene_spec
 
-    model, data, info = build_scene(args.kind, args.objects, seed=args.seed)
+    spec, model, data, info = build_scene_spec(args.kind, args.objects, seed=args.seed)
     print(f"{info.kind} scene, seed {info.seed}: {', '.join(info.objects)}")
     for name in info.objects:
         x, y, z = info.initial_poses[name][:3]
@@ -60,4 +68,9 @@ def run(args: argparse.Namespace) -> int:
         camera = args.camera or info.viewer_camera
         render_png(model, data, camera, args.png)
         print(f"wrote {args.png} ({camera})")
+    if args.xml is not None:
+        from hsqbench.sim.scene_export import export_scene
+
+        path = export_scene(spec, model, info, args.xml)
+        print(f"wrote {path}; open it with: python -m mujoco.viewer --mjcf {path}")
     return 0

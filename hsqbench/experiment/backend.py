@@ -237,6 +237,10 @@ class SimBackend:
         if planner is not None:
             contents["gripper"] = to_dict(resolve_gripper(planner.grasp.gripper))
         contents["assets"] = to_dict(load_assets_config())
+        if isinstance(getattr(tc, "scene", None), str):
+            from hsqbench.sim.scene import world_files
+
+            contents["scene_world"] = world_files(load_scene_config(tc.scene))
         out["configs"] = contents
         return out
 

@@ -37,14 +37,7 @@ from hsqbench.sim.robot import Panda, RobotConfig, load_panda_spec, load_robot_c
 KINDS = ("isolated", "packed")
 INITIAL_KEY = "initial"
 OBJECT_PREFIX = "obj/"
-
-
-@dataclass(frozen=True)
-class TableConfig:
-    size_m: tuple[float, float, float] = (1.2, 1.6, 0.04)
-    centre_xy_m: tuple[float, float] = (0.35, 0.0)
-    height_m: float = 0.75
-    rgba: tuple[float, float, float, float] = (0.62, 0.5, 0.38, 1.0)
+BIN_GEOMS = tuple(f"bin/{p}" for p in ("bottom", "wall_x-", "wall_x+", "wall_y-", "wall_y+"))
 
 
 @dataclass(frozen=True)
@@ -55,38 +48,20 @@ class WorkspaceConfig:
 
 
 @dataclass(frozen=True)
-class BinConfig:
-    centre_xy_m: tuple[float, float] = (0.15, -0.5)
-    outer_size_m: tuple[float, float, float] = (0.3, 0.36, 0.14)
-    wall_m: float = 0.01
-    rgba: tuple[float, float, float, float] = (0.25, 0.45, 0.7, 1.0)
-
-
-@dataclass(frozen=True)
-class CameraPose:
-    name: str
-    pos_m: tuple[float, float, float]
-    target_m: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
 class DepthCameraConfig:
-    width_px: int = 640
-    height_px: int = 576
-    fovy_deg: float = 65.0
+    """Which cameras of the world file are depth cameras, and their range (what MJCF cannot
+    say); image size and field of view are the cameras' own (``resolution``, ``fovy``)."""
+
+    names: tuple[str, ...] = ("cam_left", "cam_right")
     min_range_m: float = 0.5
     max_range_m: float = 3.86
-    poses: tuple[CameraPose, ...] = ()
 
 
 @dataclass(frozen=True)
 class ViewerCameraConfig:
+    """The world file's camera for pictures."""
+
     name: str = "viewer"
-    pos_m: tuple[float, float, float] = (1.75, 1.0, 1.2)
-    target_m: tuple[float, float, float] = (0.3, -0.1, 0.2)
-    fovy_deg: float = 45.0
-    width_px: int = 1280
-    height_px: int = 960
 
 
 @dataclass(frozen=True)
@@ -117,11 +92,14 @@ class PlacementConfig:
 
 @dataclass(frozen=True)
 class SceneConfig:
-    """``configs/scene.yaml``; see the comments there for every value's reason."""
+    """``configs/scene.yaml``; see the comments there for every value's reason.
 
-    table: TableConfig = field(default_factory=TableConfig)
+    ``world``: the static world's MJCF (table, bin, floor, lights, cameras), a name in
+    ``scenes/`` or a path; see :func:`world_path`.
+    """
+
+    world: str = "world"
     workspace: WorkspaceConfig = field(default_factory=WorkspaceConfig)
-    bin: BinConfig = field(default_factory=BinConfig)
     depth_cameras: DepthCameraConfig = field(default_factory=DepthCameraConfig)
     viewer_camera: ViewerCameraConfig = field(default_factory=ViewerCameraConfig)
     placement: PlacementConfig = field(default_factory=PlacementConfig)
@@ -420,138 +398,45 @@ def place_objects(
 # ---- composition -------------------------------------------------------------------------------
 
 
-def _look_at_quat(pos: np.ndarray, target: np.ndarray) -> list[float]:
-    """Quaternion of a MuJoCo camera at ``pos`` looking at ``target`` (camera -z forward, +y up)."""
-    forward = np.asarray(target, float) - np.asarray(pos, float)
-    forward /= np.linalg.norm(forward)
-    z = -forward
-    x = np.cross([0.0, 0.0, 1.0], z)
-    if np.linalg.norm(x) < 1e-9:
-        raise ValueError(f"camera at {pos} looks straight up or down: give it a tilt")
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, np.column_stack([x, y, z]).reshape(-1))
-    return quat.tolist()
+def world_path(cfg: SceneConfig) -> Path:
+    """The world file: ``scenes/<world>.xml`` for a name, else the path given."""
+    from hsqbench.settings import SCENES_DIR
 
-
-def _add_static(spec: mujoco.MjSpec, cfg: SceneConfig, physics: PhysicsConfig) -> None:
-    """Floor, table, bin, lights and cameras."""
-    world = spec.worldbody
-    t = cfg.table
-    spec.add_texture(
-        name="sky",
-        type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
-        builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
-        rgb1=[0.75, 0.8, 0.85],
-        rgb2=[0.2, 0.22, 0.25],
-        width=512,
-        height=3072,
-    )
-    spec.add_texture(
-        name="floor",
-        type=mujoco.mjtTexture.mjTEXTURE_2D,
-        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
-        rgb1=[0.32, 0.34, 0.36],
-        rgb2=[0.28, 0.30, 0.32],
-        width=512,
-        height=512,
-    )
-    floor_mat = spec.add_material(name="floor", texrepeat=[6.0, 6.0], reflectance=0.05)
-    floor_mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
-    world.add_geom(
-        name="floor",
-        type=mujoco.mjtGeom.mjGEOM_PLANE,
-        pos=[t.centre_xy_m[0], t.centre_xy_m[1], -t.height_m],
-        size=[3.0, 3.0, 0.05],
-        material="floor",
-    )
-    sx, sy, sz = t.size_m
-    top = world.add_geom(
-        name="table",
-        type=mujoco.mjtGeom.mjGEOM_BOX,
-        pos=[t.centre_xy_m[0], t.centre_xy_m[1], -sz / 2],
-        size=[sx / 2, sy / 2, sz / 2],
-        rgba=list(t.rgba),
-    )
-    physics.table.apply(top)
-    leg = 0.03
-    for ix in (-1, 1):
-        for iy in (-1, 1):
-            world.add_geom(
-                type=mujoco.mjtGeom.mjGEOM_BOX,
-                pos=[
-                    t.centre_xy_m[0] + ix * (sx / 2 - 2 * leg),
-                    t.centre_xy_m[1] + iy * (sy / 2 - 2 * leg),
-                    -(t.height_m + sz) / 2,
-                ],
-                size=[leg, leg, (t.height_m - sz) / 2],
-                rgba=[0.3, 0.3, 0.3, 1.0],
-                contype=0,
-                conaffinity=0,
-                group=1,
-            )
-    b = cfg.bin
-    bx, by, bz = (s / 2 for s in b.outer_size_m)
-    w = b.wall_m / 2
-    cx, cy = b.centre_xy_m
-    parts = {
-        "bin/bottom": ([cx, cy, w], [bx, by, w]),
-        "bin/wall_x-": ([cx - bx + w, cy, bz], [w, by, bz]),
-        "bin/wall_x+": ([cx + bx - w, cy, bz], [w, by, bz]),
-        "bin/wall_y-": ([cx, cy - by + w, bz], [bx, w, bz]),
-        "bin/wall_y+": ([cx, cy + by - w, bz], [bx, w, bz]),
-    }
-    for name, (pos, size) in parts.items():
-        geom = world.add_geom(
-            name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=pos, size=size, rgba=list(b.rgba)
+    path = Path(cfg.world)
+    if path.suffix != ".xml" and len(path.parts) == 1:
+        path = SCENES_DIR / f"{cfg.world}.xml"
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"scene world file {path} does not exist (world: {cfg.world!r} in the scene config "
+            "names a file in scenes/ or a path)"
         )
-        physics.table.apply(geom)
+    return path
 
-    spec.visual.headlight.ambient = [0.25, 0.25, 0.25]
-    spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
-    spec.visual.headlight.specular = [0.05, 0.05, 0.05]
-    ws = cfg.workspace.centre_xy_m
-    world.add_light(
-        name="key",
-        pos=[ws[0] + 0.6, ws[1] + 0.8, 2.0],
-        dir=list(-np.array([0.6, 0.8, 2.0]) / np.linalg.norm([0.6, 0.8, 2.0])),
-        diffuse=[0.6, 0.6, 0.6],
-        castshadow=True,
-        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
-    )
-    world.add_light(
-        name="fill",
-        pos=[ws[0] - 0.5, ws[1] - 1.0, 1.5],
-        dir=list(-np.array([-0.5, -1.0, 1.5]) / np.linalg.norm([-0.5, -1.0, 1.5])),
-        diffuse=[0.25, 0.25, 0.25],
-        castshadow=False,
-        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
-    )
 
-    dc = cfg.depth_cameras
-    for pose in dc.poses:
-        world.add_camera(
-            name=pose.name,
-            pos=list(pose.pos_m),
-            quat=_look_at_quat(np.array(pose.pos_m), np.array(pose.target_m)),
-            fovy=dc.fovy_deg,
-            resolution=[dc.width_px, dc.height_px],
-        )
-    v = cfg.viewer_camera
-    world.add_camera(
-        name=v.name,
-        pos=list(v.pos_m),
-        quat=_look_at_quat(np.array(v.pos_m), np.array(v.target_m)),
-        fovy=v.fovy_deg,
-        resolution=[v.width_px, v.height_px],
-    )
-    spec.visual.global_.offwidth = max([v.width_px, dc.width_px])
-    spec.visual.global_.offheight = max([v.height_px, dc.height_px])
-    spec.visual.quality.shadowsize = 4096
-    # Near clip 1 cm, far 10 m (values are fractions of the model extent, set after compile).
-    spec.visual.map.znear = 0.005
-    spec.visual.map.zfar = 5.0
+def world_files(cfg: SceneConfig) -> dict[str, str]:
+    """The text of the world file and of every MJCF file beside it (those it may include), by
+    file name: what a run's config hash covers of the scene's geometry."""
+    folder = world_path(cfg).parent
+    return {p.name: p.read_text() for p in sorted(folder.glob("*.xml"))}
+
+
+def load_world(cfg: SceneConfig, physics: PhysicsConfig) -> mujoco.MjSpec:
+    """The static world (``scenes/world.xml`` and the files it includes) as a spec, with the
+    physics options and the table's contact parameters on the table top and the bin."""
+    path = world_path(cfg)
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+    except Exception as exc:
+        raise ValueError(f"{path}: MuJoCo cannot read the scene world ({exc})") from exc
+    apply_physics(spec, physics)
+    names = {g.name for g in spec.geoms}
+    missing = [n for n in ("table", *BIN_GEOMS) if n not in names]
+    if missing:
+        raise ValueError(f"{path}: the world needs geoms named {missing} (the harness reads them)")
+    for geom in spec.geoms:
+        if geom.name == "table" or geom.name.startswith("bin/"):
+            physics.table.apply(geom)
+    return spec
 
 
 def draw_object_names(kind: str, n_packed: int, rng: np.random.Generator) -> list[str]:
@@ -650,10 +535,8 @@ def compose_scene(
 ) -> mujoco.MjSpec:
     """The scene spec: static parts, the robot at the origin, objects at (xy, yaw), each first
     turned into its resting pose when ``rests`` is given."""
-    spec = mujoco.MjSpec()
+    spec = load_world(cfg, physics)
     spec.modelname = "hsqbench_scene"
-    apply_physics(spec, physics)
-    _add_static(spec, cfg, physics)
     spec.attach(load_panda_spec(robot), prefix=robot.prefix, frame=spec.worldbody.add_frame())
     z = cfg.placement.drop_height_m
     for i, (asset, (xy, yaw)) in enumerate(zip(assets, poses, strict=True)):
@@ -709,7 +592,27 @@ def build_scene(
     robot_config: RobotConfig | None = None,
     physics_config: PhysicsConfig | None = None,
 ) -> tuple[mujoco.MjModel, mujoco.MjData, SceneInfo]:
-    """Build, settle and describe a scene.
+    """Build, settle and describe a scene (:func:`build_scene_spec` without the spec)."""
+    return build_scene_spec(
+        kind,
+        objects,
+        seed,
+        scene_config=scene_config,
+        robot_config=robot_config,
+        physics_config=physics_config,
+    )[1:]
+
+
+def build_scene_spec(
+    kind: str,
+    objects: Sequence[str | ObjectLike] | str | ObjectLike | None = None,
+    seed: int = 0,
+    *,
+    scene_config: SceneConfig | None = None,
+    robot_config: RobotConfig | None = None,
+    physics_config: PhysicsConfig | None = None,
+) -> tuple[mujoco.MjSpec, mujoco.MjModel, mujoco.MjData, SceneInfo]:
+    """Build, settle and describe a scene; also returns the spec it was compiled from.
 
     Args:
         kind: ``"isolated"`` or ``"packed"``.
@@ -718,7 +621,8 @@ def build_scene(
         seed: the only source of randomness; the same seed gives the same scene.
 
     Returns:
-        ``(model, data, info)`` with ``data`` at the settled state (also keyframe ``initial``).
+        ``(spec, model, data, info)`` with ``data`` at the settled state (also keyframe
+        ``initial``, in the model only: the spec's keyframe is empty).
 
     Raises:
         ValueError: unknown kind or object (the library lists the known names), duplicate
@@ -756,7 +660,7 @@ def build_scene(
     }
     info.reset(model, data)
     info.build_time_s = time.perf_counter() - t0
-    return model, data, info
+    return spec, model, data, info
 
 
 def _describe(model, data, cfg, robot, kind, seed, names, bodies, body_ids, panda) -> SceneInfo:
@@ -769,23 +673,19 @@ def _describe(model, data, cfg, robot, kind, seed, names, bodies, body_ids, pand
         adr = model.jnt_qposadr[model.body_jntadr[b]]
         poses[n] = data.qpos[adr : adr + 7].copy()
     dc = cfg.depth_cameras
-    cams = tuple(
-        DepthCamera(p.name, dc.width_px, dc.height_px, dc.fovy_deg, dc.min_range_m, dc.max_range_m)
-        for p in dc.poses
-    )
+    cams = []
+    for name in dc.names:
+        cam = model.camera(name)
+        width, height = (int(v) for v in model.cam_resolution[cam.id])
+        fovy = float(model.cam_fovy[cam.id])
+        cams.append(DepthCamera(name, width, height, fovy, dc.min_range_m, dc.max_range_m))
     ws = cfg.workspace
     ws_lo = np.array([*(np.asarray(ws.centre_xy_m) - np.asarray(ws.size_m) / 2), 0.0])
     ws_hi = np.array([*(np.asarray(ws.centre_xy_m) + np.asarray(ws.size_m) / 2), ws.height_m])
-    b = cfg.bin
-    half = np.asarray(b.outer_size_m[:2]) / 2 - b.wall_m
-    bin_lo = np.array([*(np.asarray(b.centre_xy_m) - half), b.wall_m])
-    bin_hi = np.array([*(np.asarray(b.centre_xy_m) + half), b.outer_size_m[2]])
-    bin_ids = np.array(
-        [
-            model.geom(n).id
-            for n in (f"bin/{p}" for p in ("bottom", "wall_x-", "wall_x+", "wall_y-", "wall_y+"))
-        ]
-    )
+    bin_ids = np.array([model.geom(n).id for n in BIN_GEOMS])
+    bin_lo, bin_hi = _bin_inside(model, bin_ids)
+    table_id = model.geom("table").id
+    top_z = float(model.geom_pos[table_id, 2] + model.geom_size[table_id, 2])
     return SceneInfo(
         kind=kind,
         seed=seed,
@@ -794,11 +694,11 @@ def _describe(model, data, cfg, robot, kind, seed, names, bodies, body_ids, pand
         object_body_ids=body_ids,
         object_geom_ids=geom_ids,
         initial_poses=poses,
-        depth_cameras=cams,
+        depth_cameras=tuple(cams),
         viewer_camera=cfg.viewer_camera.name,
-        table_top_z=0.0,
-        support_plane=np.array([0.0, 0.0, 1.0, 0.0]),
-        table_geom_id=model.geom("table").id,
+        table_top_z=top_z,
+        support_plane=np.array([0.0, 0.0, 1.0, -top_z]),
+        table_geom_id=table_id,
         workspace_min=ws_lo,
         workspace_max=ws_hi,
         bin_min=bin_lo,
@@ -812,3 +712,25 @@ def _describe(model, data, cfg, robot, kind, seed, names, bodies, body_ids, pand
         tcp_site=model.site(panda.tcp_site_id).name,
         hand_body=model.body(panda.hand_body_id).name,
     )
+
+
+def _bin_inside(model: mujoco.MjModel, bin_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Corners of the bin's inside: above the bottom, between the walls, up to the walls' top
+    (the bin's box geoms are axis-aligned in the world file)."""
+    pos, size = model.geom_pos[bin_ids], model.geom_size[bin_ids]
+    bottom, walls = 0, {"x-": 1, "x+": 2, "y-": 3, "y+": 4}
+    lo = np.array(
+        [
+            pos[walls["x-"], 0] + size[walls["x-"], 0],
+            pos[walls["y-"], 1] + size[walls["y-"], 1],
+            pos[bottom, 2] + size[bottom, 2],
+        ]
+    )
+    hi = np.array(
+        [
+            pos[walls["x+"], 0] - size[walls["x+"], 0],
+            pos[walls["y+"], 1] - size[walls["y+"], 1],
+            (pos[1:, 2] + size[1:, 2]).max(),
+        ]
+    )
+    return lo, hi

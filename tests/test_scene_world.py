@@ -1,0 +1,63 @@
+"""The static world as MJCF (scenes/*.xml): the files compile, and the scene composed from them
+is the model the harness built in code before (tests/data/scene_reference.json)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from hsqbench.settings import SCENES_DIR
+from hsqbench.sim.physics import load_physics_config
+from hsqbench.sim.robot import load_robot_config
+from hsqbench.sim.scene import compose_scene, load_scene_config, world_path
+from tests.scene_reference import model_fingerprint
+
+REFERENCE = Path(__file__).parent / "data" / "scene_reference.json"
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in SCENES_DIR.glob("*.xml")))
+def test_every_scene_file_compiles(name: str) -> None:
+    model = mujoco.MjModel.from_xml_path(str(SCENES_DIR / name))
+    assert model.ngeom + model.ncam + model.nlight + model.ntex > 0
+
+
+def test_the_world_has_its_parts() -> None:
+    model = mujoco.MjModel.from_xml_path(str(world_path(load_scene_config())))
+    names = {model.geom(i).name for i in range(model.ngeom)}
+    assert {"floor", "table", "bin/bottom", "bin/wall_x-", "bin/wall_y+"} <= names
+    assert [model.camera(i).name for i in range(model.ncam)] == ["cam_left", "cam_right", "viewer"]
+    assert model.nlight == 2
+
+
+def test_the_composed_scene_is_the_model_built_in_code_before() -> None:
+    spec = compose_scene([], [], load_scene_config(), load_robot_config(), load_physics_config())
+    now = model_fingerprint(spec.compile())
+    before = json.loads(REFERENCE.read_text())
+    assert now.keys() == before.keys()
+    for key, value in before.items():
+        if isinstance(value, list) and value and not isinstance(value[0], str):
+            np.testing.assert_allclose(
+                np.asarray(now[key]), np.asarray(value), atol=1e-9, err_msg=key
+            )
+        else:
+            assert now[key] == value, key
+
+
+def test_the_table_and_bin_get_the_table_contact_parameters() -> None:
+    physics = load_physics_config()
+    spec = compose_scene([], [], load_scene_config(), load_robot_config(), physics)
+    model = spec.compile()
+    for name in ("table", "bin/bottom", "bin/wall_x+"):
+        np.testing.assert_allclose(model.geom(name).friction, physics.table.friction)
+
+
+def test_a_missing_world_file_is_named(tmp_path) -> None:
+    import dataclasses
+
+    cfg = dataclasses.replace(load_scene_config(), world=str(tmp_path / "nowhere.xml"))
+    with pytest.raises(FileNotFoundError, match=r"nowhere\.xml does not exist"):
+        world_path(cfg)
