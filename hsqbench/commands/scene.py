@@ -53,8 +53,11 @@ def render_png(model, data, camera: str, path: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hsqbench.assets.on_demand import fetch_missing
     from hsqbench.sim.scene import build_scene_spec
 
+    if args.objects:
+        fetch_missing(args.objects)  # YCB objects not downloaded yet (only without HSQ_YCB_DIR)
     spec, model, data, info = build_scene_spec(args.kind, args.objects, seed=args.seed)
     print(f"{info.kind} scene, seed {info.seed}: {', '.join(info.objects)}")
     for name in info.objects:

@@ -1,9 +1,10 @@
 """Benchmark scenes: a table, the Panda at its back edge, a bin, two depth cameras and objects.
 
 World frame = the Panda's base frame: origin at the base on the table top, x forward over the
-table, y to the robot's left, z up. The table top is the plane z = 0. Static parts come from
-``configs/scene.yaml``; the robot from :mod:`hsqbench.sim.robot`; the physics options from
-:mod:`hsqbench.sim.physics`.
+table, y to the robot's left, z up. The table top is the plane z = 0. The static world (table,
+bin, floor, lights, cameras) is MJCF in ``scenes/`` (:func:`load_world`); workspace and placement
+rules come from ``configs/scene.yaml``; the robot from :mod:`hsqbench.sim.robot`; the physics
+options from :mod:`hsqbench.sim.physics`.
 
 Kinds:
 
