@@ -211,3 +211,28 @@ def test_resting_poses_of_a_box_are_its_six_faces_larger_ones_likelier(fast_conf
     assert np.all(np.diff(heights) >= -1e-6)
     assert set(np.round(heights, 3)) == set(np.round(box.extents, 3))
     assert (box.build_dir / FILE_NAME).exists()  # cached beside the built asset
+
+
+def _dies_on_sphere(spec, config, root):
+    """A builder whose process dies on proc_sphere (as a crash in CoACD would)."""
+    if spec.name == "proc_sphere":
+        os._exit(3)
+    from hsqbench.assets.library import _build_one
+
+    return _build_one(spec, config, root)
+
+
+def test_a_build_process_that_dies_is_pinned_on_its_object(fast_config, cache):
+    from hsqbench.assets.library import BUILD_DIED, _builds, object_spec
+
+    names = ["proc_box", "proc_sphere", "proc_cylinder", "proc_l"]
+    specs = [object_spec(n, fast_config) for n in names]
+    results = {
+        name: (asset, error)
+        for name, asset, error, _ in _builds(specs, fast_config, cache, 2, _dies_on_sphere)
+    }
+    assert set(results) == set(names)  # every object answered once
+    assert results["proc_sphere"] == (None, BUILD_DIED)
+    for name in ("proc_box", "proc_cylinder", "proc_l"):
+        asset, error = results[name]
+        assert error is None and asset.name == name

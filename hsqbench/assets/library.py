@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import sys
 import warnings
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
@@ -174,15 +174,18 @@ def _reason(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}"
 
 
+Builder = Callable[[ObjectSpec, AssetsConfig, Path], tuple[ObjectAsset, list[str]]]
+
+
 def _pool_pass(
-    specs: list[ObjectSpec], config: AssetsConfig, root: Path, jobs: int
+    specs: list[ObjectSpec], config: AssetsConfig, root: Path, jobs: int, build: Builder
 ) -> Iterator[tuple[str, ObjectAsset | None, str | None, list[str]]]:
     """Build ``specs`` in one pool of ``jobs`` processes; yields (name, asset, error, warnings)
     as they finish, error ``None`` on success. Objects lost to a dead worker are yielded last
     with the error ``BUILD_DIED`` (their build may not have started)."""
     lost: list[str] = []
     with ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn")) as pool:
-        futures = {pool.submit(_build_one, s, config, root): s.name for s in specs}
+        futures = {pool.submit(build, s, config, root): s.name for s in specs}
         for future in as_completed(futures):
             name = futures[future]
             try:
@@ -199,26 +202,32 @@ def _pool_pass(
 
 
 def _builds(
-    specs: list[ObjectSpec], config: AssetsConfig, root: Path, jobs: int
+    specs: list[ObjectSpec],
+    config: AssetsConfig,
+    root: Path,
+    jobs: int,
+    build: Builder = _build_one,
 ) -> Iterator[tuple[str, ObjectAsset | None, str | None, list[str]]]:
+    """(name, asset, error, warnings) of each spec as it is built (``build``: a picklable
+    function, so that tests can make a worker die)."""
     if jobs == 1:
         for spec in specs:
             try:
-                asset, messages = _build_one(spec, config, root)
+                asset, messages = build(spec, config, root)
             except Exception as exc:
                 yield spec.name, None, _reason(exc), []
                 continue
             yield spec.name, asset, None, messages
         return
     lost = []
-    for name, asset, error, messages in _pool_pass(specs, config, root, jobs):
+    for name, asset, error, messages in _pool_pass(specs, config, root, jobs, build):
         if error == BUILD_DIED:
             lost.append(name)
         else:
             yield name, asset, error, messages
     by_name = {s.name: s for s in specs}
     for name in lost:  # one at a time, so the object that kills its process is the one blamed
-        yield from _pool_pass([by_name[name]], config, root, 1)
+        yield from _pool_pass([by_name[name]], config, root, 1, build)
 
 
 def prepare_objects(
