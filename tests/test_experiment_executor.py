@@ -161,3 +161,19 @@ def test_ray_executor_arguments() -> None:
         RayExecutor(address="auto", num_cpus=2)
     with pytest.raises(ValueError, match="--executor ray"):
         make_executor("local", 2, "auto")
+
+
+def test_ray_runs_real_trials_as_one_process_does(tmp_path, monkeypatch) -> None:
+    """The simulation backend itself through Ray: the same rows as in this process."""
+    _ray()
+    monkeypatch.setenv("HSQ_CACHE_DIR", str(tmp_path / "cache"))
+    config = ExperimentConfig(
+        planners=("hsq",),
+        isolated=IsolatedConfig(objects=("proc_box", "proc_cylinder"), attempts_per_object=1),
+        packed=PackedConfig(enabled=False),
+    )
+    run_benchmark(config, tmp_path / "serial", executor=SerialExecutor(), progress=False)
+    run_benchmark(config, tmp_path / "ray", executor=make_executor("ray", 2), progress=False)
+    serial = load_results(tmp_path / "serial").attempts
+    assert serial and all(r["status"] == "ok" for r in serial), [r["detail"] for r in serial]
+    assert _rows(tmp_path / "ray") == _rows(tmp_path / "serial")
