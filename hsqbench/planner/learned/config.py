@@ -40,6 +40,11 @@ class ContactGraspNetConfig:
         confidence_threshold: grasps with a lower confidence are dropped.
         max_grasps: at most this many grasps, best confidence first (0: all).
         gripper_depth_m: base-to-fingertip-centre distance the network's poses use, metres.
+        width_source: ``cloud`` (the other contact found on the cloud along the closing line) or
+            ``network`` (the pose as the package places it); see :mod:`.width`.
+        width_ray_radius_m: cloud points within this distance of the closing line count, m.
+        width_min_m: points nearer than this to the contact along the line are its own surface.
+        width_reach_m: points farther than this along the line are not looked at, m.
         eliminate: run the harness's elimination rules (those of hsq and the baselines) on the
             network's grasps.
         device: ``auto`` (CUDA when present, else CPU), ``cpu`` or ``cuda``.
@@ -56,6 +61,10 @@ class ContactGraspNetConfig:
     confidence_threshold: float = 0.5
     max_grasps: int = 0
     gripper_depth_m: float = 0.1034
+    width_source: Literal["cloud", "network"] = "cloud"
+    width_ray_radius_m: float = 0.003
+    width_min_m: float = 0.006
+    width_reach_m: float = 0.1
     eliminate: bool = False
     device: Literal["auto", "cpu", "cuda"] = "auto"
     torch_threads: int = 1
@@ -65,10 +74,15 @@ class ContactGraspNetConfig:
             value = getattr(self, key)
             if not (np.isfinite(value) and value >= 0):
                 raise ValueError(f"contact_graspnet.{key} must be >= 0 m, got {value}")
-        for key in ("table_spacing_m", "gripper_depth_m"):
+        for key in ("table_spacing_m", "gripper_depth_m", "width_ray_radius_m", "width_reach_m"):
             value = getattr(self, key)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"contact_graspnet.{key} must be > 0 m, got {value}")
+        if not 0.0 <= self.width_min_m < self.width_reach_m:
+            raise ValueError(
+                "contact_graspnet.width_min_m must be in [0, width_reach_m), got "
+                f"{self.width_min_m}"
+            )
         if not 0.0 <= self.confidence_threshold < 1.0:
             raise ValueError(
                 "contact_graspnet.confidence_threshold must be in [0, 1), got "

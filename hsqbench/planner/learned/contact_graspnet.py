@@ -14,8 +14,11 @@ A learned 6-DoF grasp detector for the Franka hand, run through the PyTorch port
    grasps whose contact is a patch point are dropped).
 4. The network's poses become :class:`~hsqbench.planner.grasp.Grasp` frames (:mod:`.frames`);
    its confidence is the score (factor ``confidence``); grasps under ``confidence_threshold``
-   go.
-5. By default nothing else is removed: the network predicts collision-free grasps itself. With
+   go. The port's width head is unusable, so ``P_G`` and the width come from the cloud along
+   each grasp's closing line (``width_source: cloud``, :mod:`.width`), or from the pose as the
+   package places it (``network``).
+5. By default nothing else is removed (but grasps wider than the hand opens): the network
+   predicts collision-free grasps itself. With
    ``eliminate`` the harness's rules (width, support, table, collision, sweep; those of hsq and
    the baselines, same gripper and settings) run on them too.
 
@@ -43,7 +46,7 @@ from hsqbench.planner.baselines.planner import clean_input
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.elimination import RULE_DESCRIPTIONS, approach_openings, eliminate
-from hsqbench.planner.learned import frames, network
+from hsqbench.planner.learned import frames, network, width
 from hsqbench.planner.learned.config import (
     ContactGraspNetConfig,
     resolve_contact_graspnet_config,
@@ -97,12 +100,14 @@ def predict(
     plane: Array | None,
     cfg: ContactGraspNetConfig,
     seed: int,
+    elimination_voxel_m: float,
+    max_opening_m: float,
 ) -> tuple[Array, Array, Array, Array]:
     """Network grasps on the object cloud: (``P_G`` (G, 3), rotations (G, 3, 3), widths (G,),
     confidence (G,)), world frame, best confidence first, threshold applied."""
     device = network.resolve_device(cfg.device)
     up = np.array([0.0, 0.0, 1.0]) if plane is None else plane[:3]
-    positions, rotations, widths, conf = [], [], [], []
+    centres, rotations, contacts, conf = [], [], [], []
     for i, (points, frame) in enumerate(_views(cloud, cameras, cfg, up)):
         if points.shape[0] < 64:
             continue  # a camera that sees (almost) nothing of the object
@@ -118,22 +123,33 @@ def predict(
         pos, rot = frames.network_to_grasp_frames(
             frames.poses_to_world(out.poses[keep], frame), cfg.gripper_depth_m
         )
-        positions.append(pos)
+        centres.append(pos)
         rotations.append(rot)
-        widths.append(out.widths[keep])
+        contacts.append(net_in[out.input_index[keep]])
         conf.append(out.confidence[keep])
-    if not positions:
+    if not centres:
         return np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0), np.zeros(0)
     conf_all = np.concatenate(conf)
     order = np.argsort(-conf_all, kind="stable")
     if cfg.max_grasps:
         order = order[: cfg.max_grasps]
-    return (
-        np.concatenate(positions)[order],
-        np.concatenate(rotations)[order],
-        np.concatenate(widths)[order],
-        conf_all[order],
-    )
+    centre = np.concatenate(centres)[order]
+    rot = np.concatenate(rotations)[order]
+    contact = np.concatenate(contacts)[order]
+    if cfg.width_source == "cloud":
+        coarse = voxel_downsample(cloud, elimination_voxel_m).points
+        centre, widths, _ = width.place_on_cloud(
+            coarse,
+            contact,
+            rot[:, :, 0],
+            centre,
+            cfg.width_ray_radius_m,
+            cfg.width_min_m,
+            cfg.width_reach_m,
+        )
+    else:  # the package's placement: one finger at the contact, the hand open (8 cm, rounded)
+        widths = np.minimum(2.0 * np.linalg.norm(centre - contact, axis=1), max_opening_m)
+    return centre, rot, widths, conf_all[order]
 
 
 def _set_threads(n: int) -> None:
@@ -186,7 +202,9 @@ def plan_contact_graspnet(
 
     tick = time.perf_counter()
     seed = 0 if seed is None else int(seed)
-    positions, rotations, widths, conf = predict(clean.points, cameras, plane, cfg, seed)
+    positions, rotations, widths, conf = predict(
+        clean.points, cameras, plane, cfg, seed, gcfg.elimination_voxel_m, grip.max_opening_m
+    )
     timings["network"] = time.perf_counter() - tick
 
     n = positions.shape[0]
@@ -207,7 +225,11 @@ def plan_contact_graspnet(
             cands, clean.points, grip, gcfg, plane, seed, camera_positions=cameras
         ).remaining
     else:
+        # Only the physical limit: a grasp wider than the hand opens cannot be tried (the
+        # network's own placement never is; one found on the cloud can be).
         lines.openings = approach_openings(lines.half_lengths, grip, gcfg)
+        cands.rejected_by[widths > grip.max_opening_m] = "width"
+        remaining["width"] = int(np.count_nonzero(cands.kept))
     timings["elimination"] = time.perf_counter() - tick
 
     kept = cands.kept

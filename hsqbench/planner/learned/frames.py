@@ -104,12 +104,14 @@ def table_patch(centre: Array, plane: Array, radius_m: float, spacing_m: float) 
     return foot + a[keep, None] * u + b[keep, None] * v
 
 
-def visible_from(points: Array, camera: Array, radius_factor: float = 10.0) -> NDArray[np.bool_]:
+def visible_from(points: Array, camera: Array, radius_factor: float = 1e4) -> NDArray[np.bool_]:
     """Points a camera at ``camera`` sees (hidden point removal, Katz, Tal and Basri 2007).
 
     Each point is flipped about a sphere around the camera (radius ``radius_factor`` times the
     farthest point); the points on the convex hull of the flipped cloud and the camera are the
     visible ones. Used to split a fused cloud into views when the cameras' own parts are unknown.
+    ``radius_factor`` 1e4: on the harness's noisy clouds smaller spheres keep only the outermost
+    points (mustard bottle: 1 % of a camera's points at 10, 22 % at 100, 98 % at 1e4).
     """
     rel = points - camera
     norm = np.linalg.norm(rel, axis=1, keepdims=True)

@@ -1,12 +1,19 @@
 """The Contact-GraspNet network of ``cgn-pytorch`` (0.4.3): loading and one seeded forward pass.
 
-The package's own ``inference()`` is not used: it subsamples with Python's global ``random``,
-prints, drops the predicted widths and clamps them to 4 cm (it passes ``gripper_width=0.08`` to
-the forward pass, whose clamp is ``[-w, w / 2]``). Here the same forward pass runs with the
-Franka's full 8 cm (``gripper_width=0.16``, the forward pass's own default), the subsample is
-drawn from ``numpy.random.default_rng(seed)`` and torch's generator (the farthest point
-sampling's random start inside the network) is seeded with the same seed, so one seed gives one
-result. torch, torch-geometric, torch-cluster and cgn-pytorch are imported here only.
+The package's own ``inference()`` is not used: it subsamples with Python's global ``random`` and
+prints. Here the same forward pass runs (with the same ``gripper_width=0.08`` and depth) on a
+subsample drawn, and put in an order drawn, from ``numpy.random.default_rng(seed)``. The network's
+farthest point sampling (torch-cluster) starts at a random point that ignores every seed (its CPU
+code does not use torch's generator: measured, three calls after ``torch.manual_seed(0)`` gave
+three different starts), so it is run with ``random_start=False`` here and inside the network (the
+package's ``pointnet2.fps`` is replaced once, at load): it then starts at the first point of the
+seeded order, and one seed gives one result. torch, torch-geometric, torch-cluster and cgn-pytorch are imported here only.
+
+The width head of the 0.4.3 weights is not usable: its batch-norm running variance is ~1e9 and
+its raw outputs on a harness box cloud range from -2600 to +200 (metres), uncorrelated with the
+box (r = 0.08). The forward pass clamps them to ``[-0.08, 0.04]`` m before placing the pose, so a
+pose sits 4 cm (or -2 cm) from its contact along the closing axis whatever the object; see
+:mod:`.width` for how the planner places ``P_G`` instead.
 """
 
 from __future__ import annotations
@@ -25,9 +32,8 @@ INSTALL_HINT = (
     "`pip install -e '.[learned]'` and then `make learned` (installs cgn-pytorch without its "
     "pinned dependencies and builds torch-cluster from source, about 11 minutes on 2 cores)"
 )
-#: Franka stroke handed to the forward pass as ``gripper_width``: its clamp keeps widths in
-#: ``[0, gripper_width / 2]`` = [0, 8 cm].
-_FORWARD_GRIPPER_WIDTH_M = 0.16
+#: ``gripper_width`` the package's ``inference()`` hands the forward pass (Franka stroke).
+_FORWARD_GRIPPER_WIDTH_M = 0.08
 
 
 class LearnedExtraMissing(RuntimeError):
@@ -40,13 +46,11 @@ class NetworkOutput:
 
     Attributes:
         poses: (G, 4, 4) gripper-base poses (see :mod:`hsqbench.planner.learned.frames`).
-        widths: (G,) predicted contact separation, metres.
         confidence: (G,) grasp success probability in [0, 1].
         input_index: (G,) index, into the cloud given, of the contact point of each grasp.
     """
 
     poses: NDArray[np.float64]
-    widths: NDArray[np.float64]
     confidence: NDArray[np.float64]
     input_index: NDArray[np.int64]
 
@@ -84,7 +88,11 @@ def resolve_device(device: str) -> str:
 @functools.lru_cache(maxsize=2)
 def load_model(device: str):
     """The pretrained model shipped in the cgn-pytorch wheel, on ``device``, in eval mode."""
-    _torch, _, cgn_pytorch = import_backend()
+    _, fps, cgn_pytorch = import_backend()
+    import cgn_pytorch.pointnet2 as pointnet2
+
+    # Deterministic farthest point sampling in the network's deeper layers (module notes).
+    pointnet2.fps = functools.partial(fps, random_start=False)
     with contextlib.redirect_stdout(io.StringIO()):  # from_pretrained prints progress
         model, _, _ = cgn_pytorch.from_pretrained(device="cpu" if device == "cpu" else 0)
     model.eval()
@@ -107,16 +115,14 @@ def run_network(
     if cloud.shape[0] < 64:
         raise ValueError(f"the cloud has {cloud.shape[0]} points; the network needs at least 64")
     rng = np.random.default_rng(seed)
-    keep = np.arange(cloud.shape[0])
-    if keep.size > max_points:
-        keep = np.sort(rng.choice(keep.size, size=max_points, replace=False))
-    torch.manual_seed(seed)
+    keep = rng.permutation(cloud.shape[0])[:max_points]
+    torch.manual_seed(seed)  # nothing random is left in the forward pass; for safety
     model = load_model(device)
     pcd = torch.as_tensor(cloud[keep], dtype=torch.float32, device=device)
     batch = torch.zeros(pcd.shape[0], dtype=torch.int64, device=device)
     with torch.no_grad():
-        idx = fps(pcd, batch, min(1.0, 2048 / pcd.shape[0]))
-        _, poses, logits, widths, _, _ = model(
+        idx = fps(pcd, batch, min(1.0, 2048 / pcd.shape[0]), random_start=False)
+        _, poses, logits, _, _, _ = model(
             pcd[:, 3:],
             pcd_poses=pcd,
             batch=batch,
@@ -126,7 +132,6 @@ def run_network(
         )
     return NetworkOutput(
         poses=poses.reshape(-1, 4, 4).cpu().numpy().astype(np.float64),
-        widths=widths.reshape(-1).cpu().numpy().astype(np.float64),
         confidence=torch.sigmoid(logits).reshape(-1).cpu().numpy().astype(np.float64),
         input_index=keep[idx.cpu().numpy()],
     )
