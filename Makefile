@@ -33,7 +33,8 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 # torch for the learned extra: without an NVIDIA driver the CPU-only build (190 MB, not ~3 GB of
-# CUDA libraries), from PyTorch's CPU index or a local wheel; with one, the default wheel.
+# CUDA libraries), from PyTorch's CPU index or a local wheel; with one, the default wheel. Only
+# torch itself comes from that index (--no-deps); its dependencies come with the extra, from PyPI.
 ifeq ($(shell command -v nvidia-smi 2>/dev/null),)
 TORCH_PIP ?= "torch==2.13.0+cpu" --extra-index-url https://download.pytorch.org/whl/cpu
 else
@@ -42,7 +43,7 @@ endif
 # torch-cluster compiles one file at a time (MAX_JOBS=1: a shared machine; ~11 min on 2 cores
 # the first time). pip caches the wheel it builds, so later venvs install it in seconds.
 $(LEARNED_STAMP): $(STAMP)
-	$(PY) -c "import torch" 2>/dev/null || $(PY) -m pip install --quiet $(TORCH_PIP)
+	$(PY) -c "import torch" 2>/dev/null || $(PY) -m pip install --quiet --retries 1 --no-deps $(TORCH_PIP)
 	$(PY) -m pip install --quiet wheel -e ".[learned]"
 	$(PY) -m pip install --quiet --no-deps "cgn-pytorch==0.4.3"
 	MAX_JOBS=$${MAX_JOBS:-1} $(PY) -m pip install --quiet --no-build-isolation "torch-cluster==1.6.3"
