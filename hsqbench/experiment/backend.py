@@ -34,6 +34,16 @@ def _config_text(name_or_path: str) -> str:
     return json.dumps(load_config_data(name_or_path), sort_keys=True)
 
 
+def _config_exists(name: str) -> bool:
+    from hsqbench.config import ConfigError, resolve_config_path
+
+    try:
+        resolve_config_path(name)
+    except ConfigError:
+        return False
+    return True
+
+
 class TrialRunnerUnavailable(RuntimeError):
     """The simulation trial runner cannot be imported: nothing can be run."""
 
@@ -230,6 +240,12 @@ class SimBackend:
         if planner is not None:
             contents["gripper"] = to_dict(resolve_gripper(planner.grasp.gripper))
         contents["assets"] = to_dict(load_assets_config())
+        # The oracle's (graspability and the oracle planner) and the learned planner's own files.
+        if getattr(tc, "graspability", None) is not None:
+            contents["oracle"] = _config_text(tc.graspability)
+        for own in ("oracle", "contact_graspnet"):
+            if own not in contents and _config_exists(own):
+                contents[own] = _config_text(own)
         out["configs"] = contents
         return out
 
