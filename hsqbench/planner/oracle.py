@@ -282,8 +282,9 @@ class OraclePlanner:
                 "gives it to privileged planners only"
             )
         t0 = time.perf_counter()
-        seed = 0 if context.seed is None else int(context.seed)
-        cands, _ = oracle_candidates(context.truth, self.gripper, self.config, seed)
+        # The presentation's seed, not the context's: the graspability check searched the same
+        # samples, so the oracle finds a grasp exactly where it marked the presentation graspable.
+        cands, _ = oracle_candidates(context.truth, self.gripper, self.config, context.truth.seed)
         grasps = cands.ranked()
         total = time.perf_counter() - t0
         return PlanResult(
