@@ -3,12 +3,16 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+LEARNED_STAMP := $(VENV)/.learned
+# `make test` (and CI) installs the learned extra too, so the real network is tested on every
+# submission; LEARNED=0 leaves it out (its tests then skip, saying why).
+LEARNED ?= 1
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: help install test test-slow lint format bench benchmark assets clean
+.PHONY: help install learned test test-slow lint format bench benchmark assets clean
 
 help:
 	@echo "make benchmark   run both experiments of the paper and write results/<run>/ (CONFIG=quick ...)"
@@ -16,6 +20,7 @@ help:
 	@echo "make test-slow   run the slow checks too (every object of the library, long fits)"
 	@echo "make bench       time the planner and the trial loop (bench/)"
 	@echo "make assets      build the whole object library (optional: benchmark builds what it needs)"
+	@echo "make learned     install the contact-graspnet planner (torch, cgn-pytorch, torch-cluster)"
 	@echo "make lint        ruff"
 
 # The venv is (re)built when it is missing or when pyproject.toml changed since the last install.
@@ -30,10 +35,30 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-test: $(STAMP)
+# torch for the learned extra: without an NVIDIA driver the CPU-only build (190 MB, not ~3 GB of
+# CUDA libraries), from PyTorch's CPU index or a local wheel; with one, the default wheel. Only
+# torch itself comes from that index (--no-deps); its dependencies come with the extra, from PyPI.
+ifeq ($(shell command -v nvidia-smi 2>/dev/null),)
+TORCH_PIP ?= "torch==2.13.0+cpu" --extra-index-url https://download.pytorch.org/whl/cpu
+else
+TORCH_PIP ?= "torch>=2.5"
+endif
+# torch-cluster compiles one file at a time (MAX_JOBS=1: a shared machine; ~11 min on 2 cores
+# the first time). pip caches the wheel it builds, so later venvs install it in seconds.
+$(LEARNED_STAMP): $(STAMP)
+	$(PY) -c "import torch" 2>/dev/null || $(PY) -m pip install --quiet --retries 1 --no-deps $(TORCH_PIP)
+	$(PY) -m pip install --quiet wheel -e ".[learned]"
+	$(PY) -m pip install --quiet --no-deps "cgn-pytorch==0.4.3"
+	MAX_JOBS=$${MAX_JOBS:-1} $(PY) -m pip install --quiet --no-build-isolation "torch-cluster==1.6.3"
+	$(PY) -c "import cgn_pytorch, torch_cluster; print('contact-graspnet: installed')"
+	@touch $(LEARNED_STAMP)
+
+learned: $(LEARNED_STAMP)
+
+test: $(STAMP) $(if $(filter 1,$(LEARNED)),$(LEARNED_STAMP))
 	$(PY) -m pytest -q -m "not slow"
 
-test-slow: $(STAMP)
+test-slow: $(STAMP) $(if $(filter 1,$(LEARNED)),$(LEARNED_STAMP))
 	$(PY) -m pytest -q
 
 lint: $(STAMP)

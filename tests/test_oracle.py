@@ -94,3 +94,17 @@ def test_same_seed_same_grasps_and_the_config_is_checked():
     b = p.plan(None, PlanningContext(support_plane=TABLE, truth=truth, seed=3))
     np.testing.assert_array_equal(a.grasps[0].position, b.grasps[0].position)
     assert load_oracle_config().friction_coefficient > 0
+
+
+def test_the_planner_finds_grasps_exactly_where_the_check_says_graspable(oracle):
+    scenes = [
+        box("cube", [0.05] * 3),
+        box("slab", [0.02, 0.3, 0.1]),
+        box("wide", [0.09, 0.1, 0.12]),
+    ]
+    for seed, obj in enumerate(scenes):
+        truth = SceneTruth((obj,), TABLE, seed=seed)
+        counts = feasible_grasps(truth, oracle.gripper, oracle.config, truth.seed)
+        plan = oracle.plan(None, PlanningContext(support_plane=TABLE, truth=truth, seed=99))
+        assert (counts[obj.name] > 0) == (len(plan.grasps) > 0)
+        assert len(plan.grasps) >= counts[obj.name]

@@ -34,6 +34,16 @@ def _config_text(name_or_path: str) -> str:
     return json.dumps(load_config_data(name_or_path), sort_keys=True)
 
 
+def _config_exists(name: str) -> bool:
+    from hsqbench.config import ConfigError, resolve_config_path
+
+    try:
+        resolve_config_path(name)
+    except ConfigError:
+        return False
+    return True
+
+
 class TrialRunnerUnavailable(RuntimeError):
     """The simulation trial runner cannot be imported: nothing can be run."""
 
@@ -241,6 +251,12 @@ class SimBackend:
             from hsqbench.sim.scene import world_files
 
             contents["scene_world"] = world_files(load_scene_config(tc.scene))
+        # The oracle's (graspability and the oracle planner) and the learned planner's own files.
+        if getattr(tc, "graspability", None) is not None:
+            contents["oracle"] = _config_text(tc.graspability)
+        for own in ("oracle", "contact_graspnet"):
+            if own not in contents and _config_exists(own):
+                contents[own] = _config_text(own)
         out["configs"] = contents
         return out
 

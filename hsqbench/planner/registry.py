@@ -45,10 +45,20 @@ def _oracle(config: Any = None) -> Planner:
     return OraclePlanner(config)
 
 
+def _contact_graspnet(config: Any = None, *, eliminate: bool = False) -> Planner:
+    """Contact-GraspNet (optional extra ``learned``; without it the error says how to install)."""
+    from hsqbench.planner.learned.contact_graspnet import ContactGraspNetPlanner
+
+    name = "contact-graspnet-elim" if eliminate else "contact-graspnet"
+    return ContactGraspNetPlanner(config, eliminate=eliminate, name=name)
+
+
 _FACTORIES: dict[str, PlannerFactory] = {
     "hsq": _hsq,
     "single-sq": _single_sq,
     "antipodal": _antipodal,
+    "contact-graspnet": _contact_graspnet,
+    "contact-graspnet-elim": lambda config=None: _contact_graspnet(config, eliminate=True),
     # Privileged: reads the true meshes, not the cloud (hsqbench.planner.oracle).
     "oracle": _oracle,
 }
@@ -80,6 +90,8 @@ def get_planner(name: str, config: Any = None) -> Planner:
 
     Raises:
         ValueError: unknown ``name``; the message lists the registered names.
+        LearnedExtraMissing: (a RuntimeError) ``contact-graspnet*`` without the ``learned``
+            extra; the message says how to install it.
     """
     try:
         factory = _FACTORIES[name]

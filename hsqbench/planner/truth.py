@@ -62,10 +62,13 @@ class SceneTruth:
     Attributes:
         objects: their hulls.
         support_plane: the table ``(a, b, c, d)``, unit normal up.
+        seed: the presentation's seed for the oracle's sampling, so that the graspability check
+            and the oracle planner search the same samples of the same presentation.
     """
 
     objects: tuple[ObjectTruth, ...]
     support_plane: tuple[float, float, float, float]
+    seed: int = 0
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -33,9 +33,10 @@ def scene_truth(
     geom_ids: dict[str, np.ndarray],
     names: Sequence[str],
     support_plane: Sequence[float],
+    seed: int = 0,
 ) -> SceneTruth:
-    """The objects ``names`` (those on the table) as :class:`SceneTruth`."""
+    """The objects ``names`` (those on the table) as :class:`SceneTruth` (``seed``: its field)."""
     mujoco.mj_kinematics(model, data)
     objects = tuple(object_truth(model, data, n, geom_ids[n]) for n in names)
     plane = tuple(float(x) for x in support_plane)
-    return SceneTruth(objects, (plane[0], plane[1], plane[2], plane[3]))
+    return SceneTruth(objects, (plane[0], plane[1], plane[2], plane[3]), seed)

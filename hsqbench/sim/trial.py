@@ -339,8 +339,9 @@ class TrialEnv:
         from hsqbench.sim.scene_truth import scene_truth
 
         names = self.objects_on_table()
+        seed = int(self.rngs["oracle"].integers(2**31))
         return scene_truth(
-            self.model, self.data, self.info.object_geom_ids, names, self.info.support_plane
+            self.model, self.data, self.info.object_geom_ids, names, self.info.support_plane, seed
         )
 
     def graspable_objects(self, truth: Any) -> list[str] | None:
@@ -351,8 +352,7 @@ class TrialEnv:
 
         if self._oracle is None:
             self._oracle = OraclePlanner(self.config.graspability)
-        seed = int(self.rngs["oracle"].integers(2**31))
-        counts = feasible_grasps(truth, self._oracle.gripper, self._oracle.config, seed)
+        counts = feasible_grasps(truth, self._oracle.gripper, self._oracle.config, truth.seed)
         return [n for n, c in counts.items() if c > 0]
 
     def object_pose(self, name: str) -> tuple[float, ...]:
