@@ -28,6 +28,7 @@ Each grasp is a closing line with one roll (its own approach), so the result car
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 
@@ -278,8 +279,6 @@ class ContactGraspNetPlanner:
         eliminate: bool | None = None,
         name: str = "contact-graspnet",
     ) -> None:
-        import dataclasses
-
         network.import_backend()  # fail now, with the install hint, not at the first plan
         cfg = resolve_contact_graspnet_config(config)
         if eliminate is not None:
