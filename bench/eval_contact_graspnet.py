@@ -1,6 +1,7 @@
 """How to feed the harness's cloud to Contact-GraspNet: input frame, views, density, table patch.
 
-For each adapter variant and each harness cloud (the two-camera clouds of isolated YCB objects,
+For each adapter variant (the other settings as in ``configs/contact_graspnet.yaml``; "table":
+a 30 cm table patch) and each harness cloud (the two-camera clouds of isolated YCB objects,
 rendered and cached by ``eval_planner_ycb.observe``), runs the ``contact-graspnet`` planner with
 the harness's elimination rules on and reports, over the clouds:
 
@@ -35,18 +36,18 @@ from eval_planner_ycb import observe
 from hsqbench.planner.learned.config import load_contact_graspnet_config
 from hsqbench.planner.learned.contact_graspnet import plan_contact_graspnet
 
+NO_TABLE = {"table_patch_radius_m": 0.0}
+TABLE = {"table_patch_radius_m": 0.3}
 VARIANTS = {
-    "world_centred fused": {},
-    "camera fused": {"input_frame": "camera"},
-    "world_centred per_camera": {"views": "per_camera"},
-    "world_centred fused, network width": {"width_source": "network"},
-    "world_centred fused, table 30 cm": {"table_patch_radius_m": 0.3},
-    "world_centred fused, table 30 cm, 3 mm": {"table_patch_radius_m": 0.3, "input_voxel_m": 0.003},
-    "camera fused, table 30 cm, 3 mm": {
-        "input_frame": "camera",
-        "table_patch_radius_m": 0.3,
-        "input_voxel_m": 0.003,
-    },
+    "world centred, fused": NO_TABLE,
+    "camera frame, fused": {**NO_TABLE, "input_frame": "camera"},
+    "world centred, per camera": {**NO_TABLE, "views": "per_camera"},
+    "world centred, fused, package width": {**NO_TABLE, "width_source": "network"},
+    "world centred, fused, table": TABLE,
+    "world centred, per camera, table": {**TABLE, "views": "per_camera"},
+    "world centred, fused, table, 3 mm voxels": {**TABLE, "input_voxel_m": 0.003},
+    "world centred, fused, table, package width": {**TABLE, "width_source": "network"},
+    "camera frame, fused, table": {**TABLE, "input_frame": "camera"},
 }
 TOP = 10
 SURFACE_TOL_M = 0.005

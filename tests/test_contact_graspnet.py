@@ -3,6 +3,8 @@ installed; ``make test`` installs it): grasps on a box seen by the harness's two
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -38,6 +40,9 @@ def context(seed: int = 0) -> PlanningContext:
     return PlanningContext(support_plane=TABLE, seed=seed, camera_positions=CAMERAS)
 
 
+SEEDS = range(5)
+
+
 @pytest.fixture(scope="module")
 def planner():
     from hsqbench.planner.registry import get_planner
@@ -46,8 +51,14 @@ def planner():
 
 
 @pytest.fixture(scope="module")
-def result(planner):
-    return planner.plan(box_cloud(), context())
+def plans(planner):
+    """The default planner's result on the box for each of ``SEEDS``."""
+    return [planner.plan(box_cloud(), context(seed)) for seed in SEEDS]
+
+
+@pytest.fixture(scope="module")
+def result(plans):
+    return plans[0]
 
 
 def closes_on_opposite_faces(grasp) -> bool:
@@ -63,9 +74,14 @@ def closes_on_opposite_faces(grasp) -> bool:
     )
 
 
-def test_every_grasp_has_a_finger_on_the_cloud_and_scores_in_order(result):
+def test_every_grasp_has_a_finger_on_the_cloud_and_scores_in_order(planner):
     """The whole frame chain (world -> network frame -> poses -> Grasp): one finger of every grasp
-    sits on the contact point the network chose, a point of the cloud it was given."""
+    sits on the contact point the network chose, a point of the cloud it was given (with the
+    input voxels off, so that the network sees the cloud's own points)."""
+    from hsqbench.planner.learned.contact_graspnet import ContactGraspNetPlanner
+
+    exact = ContactGraspNetPlanner(dataclasses.replace(planner.config, input_voxel_m=0.0))
+    result = exact.plan(box_cloud(), context(2))
     assert result.planner == "contact-graspnet"
     assert len(result.grasps) >= 3, result.reason
     cloud = box_cloud()
@@ -77,48 +93,44 @@ def test_every_grasp_has_a_finger_on_the_cloud_and_scores_in_order(result):
         assert gap.min() < 1e-6
 
 
-def test_top_grasps_close_on_opposite_faces_of_the_box(planner):
-    # Measured 1, 1 and 4 of the top ten for seeds 0-2 (the network's closing axes scatter by
-    # tens of degrees); a wrong frame or a misplaced P_G gives none.
-    n_opposite = 0
-    for seed in range(3):
-        plan = planner.plan(box_cloud(), context(seed))
-        n_opposite += sum(closes_on_opposite_faces(g) for g in plan.grasps[:10])
-    assert n_opposite >= 4, n_opposite
+def test_top_grasps_close_on_opposite_faces_of_the_box(plans):
+    # Measured 0, 0, 4, 4 and 3 of the top ten for seeds 0-4 (the network's closing axes scatter
+    # by tens of degrees); a wrong frame or a misplaced P_G gives none.
+    n_opposite = sum(closes_on_opposite_faces(g) for plan in plans for g in plan.grasps[:10])
+    assert n_opposite >= 6, n_opposite
 
 
-def test_grasps_approach_from_outside_the_box(result):
-    for grasp in result.grasps:
+def test_grasps_approach_from_outside_the_box(plans):
+    for grasp in [g for plan in plans for g in plan.grasps]:
         palm = grasp.position - 0.1034 * grasp.approach_axis
         local = np.abs(palm - BOX.center)
         assert np.any(local > np.asarray(BOX.half_extents) + 0.01)  # the palm is outside
         assert palm[2] > 0.0  # above the table
 
 
-def test_same_seed_same_grasps_and_timings_reported(planner, result):
-    again = planner.plan(box_cloud(), context())
-    assert len(again.grasps) == len(result.grasps)
-    for i in (0, len(result.grasps) // 2, len(result.grasps) - 1):
-        np.testing.assert_array_equal(again.grasps[i].position, result.grasps[i].position)
-        assert again.grasps[i].score == result.grasps[i].score
-    other = planner.plan(box_cloud(), context(seed=7))
-    assert not np.array_equal(other.grasps[0].position, result.grasps[0].position)
-    assert result.timings["network"] > 0 and result.timings["total"] >= result.timings["network"]
+def test_same_seed_same_grasps_and_timings_reported(planner, plans):
+    again = planner.plan(box_cloud(), context(SEEDS[-1]))
+    first = plans[-1]
+    assert len(again.grasps) == len(first.grasps) > 0
+    for i in range(len(first.grasps)):
+        np.testing.assert_array_equal(again.grasps[i].position, first.grasps[i].position)
+        assert again.grasps[i].score == first.grasps[i].score
+    assert len({len(p.grasps) for p in plans}) > 1  # the seed matters
+    assert first.timings["network"] > 0 and first.timings["total"] >= first.timings["network"]
 
 
-def test_elimination_variant_keeps_only_grasps_that_pass_the_rules(result):
+def test_elimination_variant_keeps_only_grasps_that_pass_the_rules(plans):
     from hsqbench.planner.registry import get_planner
 
     elim = get_planner("contact-graspnet-elim")
     survivors = []
-    for seed in range(3):
+    for seed, plain in zip(SEEDS, plans, strict=True):
         plan = elim.plan(box_cloud(), context(seed))
         assert plan.planner == "contact-graspnet-elim"
+        assert plan.remaining["synthesised"] == len(plain.candidates)
         assert len(plan.grasps) == plan.candidates.counts_by_reason()["kept"]
         assert sum(plan.removed_by.values()) == plan.remaining["synthesised"] - len(plan.grasps)
         survivors += list(plan.grasps)
-        if seed == 0:
-            assert plan.remaining["synthesised"] == len(result.candidates)
-    # Measured 1, 2 and 3 survivors for seeds 0-2, every one across the 6 cm faces.
-    assert survivors
+    # Measured 0, 0, 2, 8 and 5 survivors for seeds 0-4, every one across the 6 cm faces.
+    assert len(survivors) >= 5
     assert all(closes_on_opposite_faces(g) for g in survivors)

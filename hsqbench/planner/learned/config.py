@@ -54,9 +54,9 @@ class ContactGraspNetConfig:
     planner: str = "planner"
     input_frame: Literal["world_centred", "camera"] = "world_centred"
     views: Literal["fused", "per_camera"] = "fused"
-    table_patch_radius_m: float = 0.0
+    table_patch_radius_m: float = 0.3
     table_spacing_m: float = 0.005
-    input_voxel_m: float = 0.0
+    input_voxel_m: float = 0.003
     max_input_points: int = 20000
     confidence_threshold: float = 0.5
     max_grasps: int = 0

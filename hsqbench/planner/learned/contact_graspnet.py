@@ -28,6 +28,7 @@ Each grasp is a closing line with one roll (its own approach), so the result car
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 
@@ -56,10 +57,8 @@ Array = NDArray[np.float64]
 FAMILY = "cgn"
 
 
-def _views(
-    cloud: Array, cameras: Array | None, cfg: ContactGraspNetConfig, up: Array
-) -> list[tuple[Array, Array]]:
-    """``(points, T_world_frame)`` of each view the network gets."""
+def _views(cloud: Array, cameras: Array | None, cfg: ContactGraspNetConfig) -> list:
+    """``(points, camera or None)`` of each view the network gets."""
     if (cfg.views == "per_camera" or cfg.input_frame == "camera") and cameras is None:
         raise ValueError(
             f"contact_graspnet views={cfg.views!r}, input_frame={cfg.input_frame!r} need "
@@ -67,17 +66,17 @@ def _views(
             "views: fused and input_frame: world_centred"
         )
     if cfg.views == "fused":
-        parts = [(cloud, None if cameras is None else cameras.mean(axis=0))]
-    else:
-        parts = [(cloud[frames.visible_from(cloud, c)], c) for c in cameras]
-    out = []
-    for points, camera in parts:
-        if cfg.input_frame == "world_centred":
-            frame = frames.world_centred_frame(points)
-        else:
-            frame = frames.look_at_frame(camera, points.mean(axis=0), up)
-        out.append((points, frame))
-    return out
+        return [(cloud, None if cameras is None else cameras.mean(axis=0))]
+    return [(cloud[frames.visible_from(cloud, c)], c) for c in cameras]
+
+
+def _frame(net_in: Array, n_object: int, camera, cfg: ContactGraspNetConfig, up: Array) -> Array:
+    """``T_world_frame`` of the network's input: world axes at the mean of everything it is given
+    (the table patch included, as the training scenes were centred), or a camera looking at the
+    object."""
+    if cfg.input_frame == "world_centred":
+        return frames.world_centred_frame(net_in)
+    return frames.look_at_frame(camera, net_in[:n_object].mean(axis=0), up)
 
 
 def _network_input(
@@ -108,10 +107,11 @@ def predict(
     device = network.resolve_device(cfg.device)
     up = np.array([0.0, 0.0, 1.0]) if plane is None else plane[:3]
     centres, rotations, contacts, conf = [], [], [], []
-    for i, (points, frame) in enumerate(_views(cloud, cameras, cfg, up)):
+    for i, (points, camera) in enumerate(_views(cloud, cameras, cfg)):
         if points.shape[0] < 64:
             continue  # a camera that sees (almost) nothing of the object
         net_in, n_object = _network_input(points, plane, cfg)
+        frame = _frame(net_in, n_object, camera, cfg, up)
         out = network.run_network(
             frames.to_frame(net_in, frame),
             device,
@@ -279,8 +279,6 @@ class ContactGraspNetPlanner:
         eliminate: bool | None = None,
         name: str = "contact-graspnet",
     ) -> None:
-        import dataclasses
-
         network.import_backend()  # fail now, with the install hint, not at the first plan
         cfg = resolve_contact_graspnet_config(config)
         if eliminate is not None:

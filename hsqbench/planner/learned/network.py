@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import io
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,9 +59,11 @@ class NetworkOutput:
 def import_backend():
     """``(torch, fps, cgn_pytorch)``, or :class:`LearnedExtraMissing` saying how to install."""
     try:
-        import cgn_pytorch
-        import torch
-        from torch_geometric.nn import fps
+        with warnings.catch_warnings():  # meshcat's and torch.jit's deprecation notices
+            warnings.simplefilter("ignore", DeprecationWarning)
+            import cgn_pytorch
+            import torch
+            from torch_geometric.nn import fps
     except ImportError as exc:
         raise LearnedExtraMissing(f"{INSTALL_HINT} ({exc})") from exc
     return torch, fps, cgn_pytorch
@@ -120,7 +123,9 @@ def run_network(
     model = load_model(device)
     pcd = torch.as_tensor(cloud[keep], dtype=torch.float32, device=device)
     batch = torch.zeros(pcd.shape[0], dtype=torch.int64, device=device)
-    with torch.no_grad():
+    with torch.no_grad(), warnings.catch_warnings():
+        # The package calls torch.cross without dim= (a deprecation notice per call).
+        warnings.filterwarnings("ignore", message="Using torch.cross without specifying the dim")
         idx = fps(pcd, batch, min(1.0, 2048 / pcd.shape[0]), random_start=False)
         _, poses, logits, _, _, _ = model(
             pcd[:, 3:],
