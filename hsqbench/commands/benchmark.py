@@ -116,6 +116,17 @@ def run(args: argparse.Namespace) -> int:
     if args.resume and args.run is None:
         raise CommandError("--resume needs --run NAME (the run to continue)")
     config = load_experiment_config(args.config)
+    planners = args.planners
+    if planners is None:  # the protocol's planners, less optional ones whose extra is missing
+        from hsqbench.planner.registry import unavailable
+
+        planners = []
+        for p in config.planners:
+            why = unavailable(p)
+            if why is None:
+                planners.append(p)
+            else:
+                print(f"leaving out planner {p}: {why}", file=sys.stderr)
     run_dir = _run_dir(args.run, args.config)
     executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)
@@ -124,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
             config,
             run_dir,
             executor=executor,
-            planners=args.planners,
+            planners=planners,
             experiments=args.experiments,
             resume=args.resume,
             force=args.force,

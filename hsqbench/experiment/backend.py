@@ -270,6 +270,12 @@ class SimBackend:
         unknown = [p for p in planners if p not in known]
         if unknown:
             raise ValueError(f"unknown planner(s) {unknown}; known: {sorted(known)}")
+        from hsqbench.planner.registry import unavailable
+
+        for p in planners:
+            why = unavailable(p)
+            if why is not None:
+                raise ValueError(f"planner {p!r} cannot run: {why}")
 
     def prepare(self, objects: tuple[str, ...], jobs: int | None, progress: bool) -> dict[str, str]:
         """Download the YCB ones missing from the download folder (only when ``HSQ_YCB_DIR`` is

@@ -67,6 +67,19 @@ _FACTORIES: dict[str, PlannerFactory] = {
 PRIVILEGED = frozenset({"oracle"})
 
 
+def unavailable(name: str) -> str | None:
+    """Why planner ``name`` cannot run here (an optional extra is missing), or None.
+
+    The benchmark leaves such planners out of a protocol's list with this message, so a protocol
+    that names an optional planner still runs without its extra.
+    """
+    if name.startswith("contact-graspnet") and name in _FACTORIES:
+        from hsqbench.planner.learned.network import INSTALL_HINT, available
+
+        return None if available() else INSTALL_HINT
+    return None
+
+
 def register_planner(name: str, factory: PlannerFactory, *, replace: bool = False) -> None:
     """Make ``get_planner(name)`` call ``factory(config)``.
 

@@ -1,0 +1,29 @@
+"""Planner names: optional planners whose extra is missing are named with the fix."""
+
+from __future__ import annotations
+
+import pytest
+
+import hsqbench.planner.learned.network as network
+from hsqbench.experiment.backend import SimBackend
+from hsqbench.planner.registry import PRIVILEGED, planner_names, unavailable
+
+
+def test_builtin_planners_are_registered_and_the_oracle_is_privileged():
+    names = set(planner_names())
+    assert {"hsq", "single-sq", "antipodal", "oracle", "contact-graspnet"} <= names
+    assert names >= PRIVILEGED and "hsq" not in PRIVILEGED
+
+
+def test_a_missing_extra_is_reported_with_the_install_commands(monkeypatch):
+    monkeypatch.setattr(network, "available", lambda: False)
+    assert "make learned" in unavailable("contact-graspnet")
+    assert "make learned" in unavailable("contact-graspnet-elim")
+    assert unavailable("hsq") is None and unavailable("oracle") is None
+    with pytest.raises(ValueError, match=r"'contact-graspnet' cannot run: .*pip install"):
+        SimBackend().check(("hsq", "contact-graspnet"))
+
+
+def test_with_the_extra_nothing_is_reported(monkeypatch):
+    monkeypatch.setattr(network, "available", lambda: True)
+    assert unavailable("contact-graspnet") is None
