@@ -10,6 +10,15 @@ HELP = "write tables.md, table CSVs and PNG plots of a benchmark run from its re
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("run_dir", type=Path, help="the run folder, e.g. results/paper-20250101")
+    parser.add_argument(
+        "--with",
+        dest="with_runs",
+        nargs="+",
+        type=Path,
+        default=(),
+        metavar="RUN_DIR",
+        help="other runs of the same protocol and seeds whose further planners join the tables",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -17,6 +26,6 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.run_dir.is_dir():
         raise FileNotFoundError(f"{args.run_dir} is not a folder; give results/<run>")
-    for path in write_report(args.run_dir):
+    for path in write_report(args.run_dir, tuple(args.with_runs)):
         print(path)
     return 0

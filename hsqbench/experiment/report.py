@@ -337,13 +337,19 @@ def time_table(data: RunData) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def write_report(run_dir: str | Path) -> list[Path]:
+def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) -> list[Path]:
     """Write ``tables.md``, the table CSVs and the PNG plots into ``run_dir``; returns the paths.
 
-    Warns (``UserWarning``) when trials failed with infrastructure errors.
+    ``with_runs``: other runs of the same protocol whose further planners join the tables
+    (:mod:`hsqbench.experiment.combine`). Warns (``UserWarning``) when trials failed with
+    infrastructure errors.
     """
+    from hsqbench.experiment.combine import combine
+
     run_dir = Path(run_dir)
     data = load_run(run_dir)
+    for other in with_runs:
+        combine(data, load_run(other), Path(other))
     t1, t1o, t2 = table1(data), table1_per_object(data), table2(data)
     outcomes, times = outcome_table(data), time_table(data)
     written = []

@@ -1,0 +1,69 @@
+"""One report over several runs of the same protocol (``hsqbench report RUN --with OTHER``).
+
+A planner added later (e.g. one that needs an optional extra) can run in its own run folder:
+trial seeds derive from (base seed, experiment, object, index) alone, so two runs of the same
+protocol present the same poses and the same packed draws, and their rows can stand in one
+table. The runs must agree on everything that decides the trials (seeds, objects, attempts,
+rounds, draws, trial config); their config hashes differ, and the report says whose rows are
+whose.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+#: Protocol settings that decide which trials exist and what they present.
+_SAME = ("seeds", "trial_config", "isolated", "packed")
+
+
+class RunMismatch(ValueError):
+    """Two runs do not present the same trials; their rows cannot share a table."""
+
+
+def _protocol(meta: dict[str, Any]) -> dict[str, Any]:
+    config = meta.get("config", {})
+    out = {k: config.get(k) for k in _SAME}
+    out["packed_draws"] = meta.get("packed_draws")
+    return out
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal, where mappings are compared on the keys both have (a setting added by a later
+    version, such as ``exclude``, is absent from an older run's record)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return all(_same(a[k], b[k]) for k in set(a) & set(b))
+    return a == b
+
+
+def combine(main: Any, other: Any, other_dir: Path) -> None:
+    """Add ``other``'s planners (those ``main`` lacks) to ``main`` in place, with a note.
+
+    Raises:
+        RunMismatch: the runs' protocols differ (names the first setting that does).
+    """
+    mine, theirs = _protocol(main.meta), _protocol(other.meta)
+    for key in (*_SAME, "packed_draws"):
+        if not _same(mine[key], theirs[key]):
+            raise RunMismatch(
+                f"{other_dir}: its '{key}' differs from the main run's, so its trials present "
+                "other poses; run the same protocol (same config and seeds)"
+            )
+    new = [p for p in other.planners if p not in main.planners]
+    if not new:
+        return
+    main.attempts = pd.concat(
+        [main.attempts, other.attempts[other.attempts["planner"].isin(new)]], ignore_index=True
+    )
+    main.rounds = pd.concat(
+        [main.rounds, other.rounds[other.rounds["planner"].isin(new)]], ignore_index=True
+    )
+    main.planners = [*main.planners, *new]
+    versions = sorted(set(other.attempts["code_version"]))
+    main.notes.append(
+        f"rows of {', '.join(new)} come from run {other_dir.name} (config hash "
+        f"{other.meta.get('config_hash', '?')}, code {', '.join(versions)}): the same protocol, "
+        "seeds and draws, so the same poses"
+    )
