@@ -441,13 +441,17 @@ def load_world(cfg: SceneConfig, physics: PhysicsConfig) -> mujoco.MjSpec:
 
 
 def draw_object_names(kind: str, n_packed: int, rng: np.random.Generator) -> list[str]:
-    """Names drawn from the 15 YCB objects: one for ``isolated``, ``n_packed`` different ones
-    for ``packed``."""
+    """Names drawn from the paper's 15 YCB objects (those the library has): one for
+    ``isolated``, ``n_packed`` different ones for ``packed``. The paper's set, not the whole
+    library: its packed draws are known to fit the workspace (a plate, a skillet lid and a chain
+    with two others often do not)."""
     from hsqbench.assets.library import ycb_names
+    from hsqbench.experiment.config import YCB_OBJECTS
 
     if kind not in KINDS:
         raise ValueError(f"unknown scene kind {kind!r}; known: {list(KINDS)}")
-    pool = ycb_names()
+    known = set(ycb_names())
+    pool = [n for n in YCB_OBJECTS if n in known]
     count = 1 if kind == "isolated" else n_packed
     if count > len(pool):
         raise ValueError(f"cannot draw {count} different objects from {len(pool)}: {pool}")
