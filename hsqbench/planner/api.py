@@ -319,9 +319,9 @@ def plan_grasps(
 ) -> PlanResult:
     """The paper's planner: hidden superquadrics (stage one), then ranked grasps (stage two).
 
-    Before both stages, isolated points (flying pixels) are removed (``cleaning:`` in the config,
-    :mod:`hsqbench.planner.cleaning`; our addition): stage two then checks collisions against the
-    cleaned cloud. ``hidden_superquadrics[i].inliers`` index ``points`` as given.
+    Before both stages the cloud is thinned to 2 mm voxel centroids and isolated points (flying
+    pixels) are removed (``cleaning:`` in the config, :mod:`hsqbench.planner.cleaning`; our
+    addition): stage two then checks collisions against the cleaned cloud. ``hidden_superquadrics[i].inliers`` index ``points`` as given.
 
     Args:
         points: (N, 3) cloud of the object (or packed scene), world metres, table removed.
@@ -341,7 +341,8 @@ def plan_grasps(
     start = time.perf_counter()
     raw = validate_cloud(points)
     cfg = resolve_config(config)
-    cloud, kept = clean_cloud(raw, cfg.cleaning)
+    cleaned = clean_cloud(raw, cfg.cleaning)
+    cloud = cleaned.points
     t_cleaning = time.perf_counter() - start
     if cloud.shape[0] == 0:
         return PlanResult(
@@ -353,7 +354,7 @@ def plan_grasps(
     start_recovery = time.perf_counter()
     hidden = recover_hidden_superquadrics(cloud, cfg.recovery, seed=seed)
     # Inliers index the caller's cloud, not the cleaned one.
-    hidden = [dataclasses.replace(h, inliers=kept[h.inliers]) for h in hidden]
+    hidden = [dataclasses.replace(h, inliers=cleaned.input_indices(h.inliers)) for h in hidden]
     t_recovery = time.perf_counter() - start_recovery
     result = plan_from_hidden(
         cloud,
@@ -365,7 +366,7 @@ def plan_grasps(
         seed=seed,
         camera_positions=camera_positions,
     )
-    result.n_removed = raw.shape[0] - cloud.shape[0]
+    result.n_removed = cleaned.n_removed
     result.timings = {"cleaning": t_cleaning, "recovery": t_recovery, **result.timings}
     result.timings["total"] = time.perf_counter() - start
     return result
