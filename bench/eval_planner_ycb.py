@@ -3,7 +3,8 @@
 For each object and seed: the isolated scene of that seed (``build_scene("isolated", [name],
 seed)``), one observation by the scene's two depth cameras with the configured sensor model
 (``configs/perception.yaml``; ``--sensor`` overrides it), then ``plan_grasps`` with the table
-plane and the seed. Printed per object and seed: the cloud size, the number of grasps, the top
+plane, the camera centres and the seed (``--planner``: any registered planner, e.g. an
+ablation ``hsq-no-sweep`` or the antipodal baseline). Printed per object and seed: the cloud size, the number of grasps, the top
 score and width, the planner's CPU time, and either the top grasp's ground-truth check or the
 reason for no grasp (``-v``: the candidates left after each rule).
 
@@ -50,9 +51,9 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hsqbench.config import to_dict  # noqa: E402
-from hsqbench.planner import plan_grasps  # noqa: E402
-from hsqbench.planner.api import resolve_config, resolve_gripper  # noqa: E402
+from hsqbench.planner.api import PlanningContext, resolve_config, resolve_gripper  # noqa: E402
 from hsqbench.planner.gripper import GripperModel  # noqa: E402
+from hsqbench.planner.registry import get_planner  # noqa: E402
 from hsqbench.settings import cache_dir  # noqa: E402
 
 #: Spacing of the ground-truth mesh samples, metres (the fused cloud's 2 mm voxel).
@@ -221,6 +222,11 @@ def main() -> int:
     parser.add_argument("--seeds", nargs="*", type=int, default=[0, 1, 2])
     parser.add_argument("--sensor", default=None, help="override perception.yaml sensor_model")
     parser.add_argument("--config", default=None, help="planner config name or path")
+    parser.add_argument(
+        "--planner",
+        default="hsq",
+        help="a registered planner: hsq, hsq-paper, hsq-no-<addition>, antipodal, single-sq",
+    )
     parser.add_argument("--scene", default=None, help="scene config name or path (cameras)")
     parser.add_argument("--refresh", action="store_true", help="re-render cached clouds")
     parser.add_argument("-v", "--verbose", action="store_true", help="candidates after each rule")
@@ -230,21 +236,19 @@ def main() -> int:
 
     names = object_names(args.objects)
     gripper = resolve_gripper(resolve_config(args.config).grasp.gripper)
+    planner = get_planner(args.planner, args.config)
     rows = []
     for name in names:
         for seed in args.seeds:
             obs = observe(name, seed, args.sensor, args.refresh, args.scene)
             plane = obs["support_plane"]
-            if not rows:  # warm-up: imports and config parsing stay out of the first time
-                plan_grasps(obs["points"][:500], args.config, support_plane=plane, seed=seed)
-            start = time.process_time()
-            res = plan_grasps(
-                obs["points"],
-                args.config,
-                support_plane=plane,
-                seed=seed,
-                camera_positions=obs["camera_positions"],
+            context = PlanningContext(
+                support_plane=tuple(plane), seed=seed, camera_positions=obs["camera_positions"]
             )
+            if not rows:  # warm-up: imports and config parsing stay out of the first time
+                planner.plan(obs["points"][:500], PlanningContext(support_plane=tuple(plane)))
+            start = time.process_time()
+            res = planner.plan(obs["points"], context)
             cpu = time.process_time() - start
             best = res.best
             if best is not None:

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.config import resolve_config_path
+from hsqbench.planner.additions import AdditionsConfig
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet
 from hsqbench.planner.cleaning import all_removed_reason, clean_cloud
 from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_config
@@ -373,7 +374,11 @@ def plan_grasps(
 
 
 class HSQPlanner:
-    """The paper's planner behind the :class:`Planner` protocol."""
+    """The paper's planner behind the :class:`Planner` protocol.
+
+    ``additions_off``: names of additions (:mod:`hsqbench.planner.additions`) to switch off on
+    top of the config's own switches; ``name`` labels the results (e.g. ``hsq-paper``).
+    """
 
     name = "hsq"
 
@@ -381,11 +386,29 @@ class HSQPlanner:
         self,
         config: PlannerConfig | str | Path | None = None,
         gripper: GripperModel | None = None,
+        *,
+        additions_off: Sequence[str] = (),
+        name: str = "hsq",
     ) -> None:
-        self.config = resolve_config(config)
+        cfg = resolve_config(config)
+        if additions_off:
+            unknown = sorted(set(additions_off) - set(AdditionsConfig.names()))
+            if unknown:
+                raise ValueError(
+                    f"unknown addition(s) {unknown}; known: {', '.join(AdditionsConfig.names())}"
+                )
+            switches = {
+                n: getattr(cfg.additions, n) and n not in additions_off
+                for n in AdditionsConfig.names()
+            }
+            cfg = cfg.with_additions(AdditionsConfig(**switches))
+        self.config = cfg
+        self.name = name
         self.gripper = (
             gripper if gripper is not None else resolve_gripper(self.config.grasp.gripper)
         )
 
     def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
-        return plan_grasps(points, self.config, gripper=self.gripper, **context.plan_kwargs())
+        result = plan_grasps(points, self.config, gripper=self.gripper, **context.plan_kwargs())
+        result.planner = self.name
+        return result

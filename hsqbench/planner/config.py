@@ -1,16 +1,19 @@
 """Planner configuration: ``configs/planner.yaml`` loaded into typed, frozen dataclasses.
 
 Three sections: ``cleaning`` (before both stages, :mod:`hsqbench.planner.cleaning`), ``recovery``
-(stage one) and ``grasp`` (stage two). Every default here is mirrored, with its reason, in
-``configs/planner.yaml``.
+(stage one) and ``grasp`` (stage two), and ``additions``: one switch per addition of ours to the
+paper (:mod:`hsqbench.planner.additions`); a switch that is off sets the paper's values in its
+section. Every default here is mirrored, with its reason, in ``configs/planner.yaml``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from hsqbench.config import load_config
+from hsqbench.planner.additions import ADDITIONS, AdditionsConfig
 from hsqbench.planner.cleaning import CleaningConfig
 
 
@@ -111,7 +114,8 @@ class GraspConfig:
     min_part_scale_m: float = 0.0025
     level_table_lines: bool = True
     level_max_angle_deg: float = 45.0
-    # Elimination.
+    # Elimination (sweep_rule: set by additions.sweep).
+    sweep_rule: bool = True
     duplicate_distance_m: float = 0.003
     duplicate_angle_deg: float = 3.0
     elimination_voxel_m: float = 0.003
@@ -180,9 +184,25 @@ class GraspConfig:
 
 @dataclass(frozen=True)
 class PlannerConfig:
+    """The planner's sections, with the paper's values set for every addition switched off."""
+
     cleaning: CleaningConfig = field(default_factory=CleaningConfig)
     recovery: RecoveryConfig = field(default_factory=RecoveryConfig)
     grasp: GraspConfig = field(default_factory=GraspConfig)
+    additions: AdditionsConfig = field(default_factory=AdditionsConfig)
+
+    def __post_init__(self) -> None:
+        for name in self.additions.off():
+            addition = ADDITIONS[name]
+            section = getattr(self, addition.section)
+            object.__setattr__(
+                self, addition.section, dataclasses.replace(section, **addition.paper)
+            )
+
+    def with_additions(self, additions: AdditionsConfig) -> PlannerConfig:
+        """This config with other switches (switching one back on does not restore a value
+        that an off switch replaced: start from the file's config for that)."""
+        return dataclasses.replace(self, additions=additions)
 
 
 def load_planner_config(path: str | Path | None = "planner") -> PlannerConfig:
