@@ -116,18 +116,52 @@ def from_dict(cls: type[T], data: dict[str, Any], where: str = "") -> T:
         raise ConfigError(f"{where or cls.__name__}: {exc}") from exc
 
 
-def load_config(cls: type[T], name_or_path: str | Path | None = None) -> T:
-    """Load ``cls`` from a YAML file (a name in ``configs/`` or a path); defaults when ``None``."""
-    if name_or_path is None:
-        return cls()
+#: Top-level key of a config file that names the file it overrides (see :func:`load_config`).
+EXTENDS = "extends"
+
+
+def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """``over`` on top of ``base``: mappings merge key by key, anything else replaces."""
+    out = dict(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def load_config_data(name_or_path: str | Path, _chain: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """The mapping of a config file, with its ``extends:`` chain applied (the named base file
+    first, then this file's keys on top), so a variant states only what it changes."""
     path = resolve_config_path(name_or_path)
+    if path.resolve() in _chain:
+        names = " -> ".join(p.name for p in (*_chain, path.resolve()))
+        raise ConfigError(f"{path}: '{EXTENDS}' chain loops: {names}")
     try:
         data = yaml.safe_load(path.read_text()) or {}
     except yaml.YAMLError as exc:
         raise ConfigError(f"{path}: not valid YAML: {exc}") from exc
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: the top level must be a mapping")
-    return from_dict(cls, data, where=path.name)
+    base = data.pop(EXTENDS, None)
+    if base is None:
+        return data
+    if not isinstance(base, str):
+        raise ConfigError(f"{path}: '{EXTENDS}' must name one config, got {base!r}")
+    return _merge(load_config_data(base, (*_chain, path.resolve())), data)
+
+
+def load_config(cls: type[T], name_or_path: str | Path | None = None) -> T:
+    """Load ``cls`` from a YAML file (a name in ``configs/`` or a path); defaults when ``None``.
+
+    A file may start with ``extends: <name or path>``: it is then that config with this file's
+    keys on top (nested mappings merged), e.g. ``configs/scene_resting.yaml``.
+    """
+    if name_or_path is None:
+        return cls()
+    path = resolve_config_path(name_or_path)
+    return from_dict(cls, load_config_data(path), where=path.name)
 
 
 def to_dict(config: Any) -> dict[str, Any]:

@@ -52,3 +52,25 @@ def test_hash_changes_with_values() -> None:
 def test_unknown_config_name_lists_choices() -> None:
     with pytest.raises(ConfigError, match="not one of"):
         load_config(Outer, "no-such-config")
+
+
+def test_extends_overrides_only_the_keys_it_names(tmp_path) -> None:
+    (tmp_path / "base.yaml").write_text("iterations: 5\ninner:\n  spacing_m: 0.01\n  names: [x]\n")
+    (tmp_path / "variant.yaml").write_text(
+        f"extends: {tmp_path / 'base.yaml'}\ninner:\n  spacing_m: 0.02\n"
+    )
+    cfg = load_config(Outer, tmp_path / "variant.yaml")
+    assert cfg.iterations == 5  # from the base
+    assert cfg.inner.spacing_m == 0.02  # overridden
+    assert cfg.inner.names == ("x",)  # the rest of the nested mapping kept
+
+
+def test_extends_loop_and_bad_value_are_errors(tmp_path) -> None:
+    a, b = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    a.write_text(f"extends: {b}\n")
+    b.write_text(f"extends: {a}\n")
+    with pytest.raises(ConfigError, match="chain loops"):
+        load_config(Outer, a)
+    a.write_text("extends: [x, y]\n")
+    with pytest.raises(ConfigError, match="must name one config"):
+        load_config(Outer, a)

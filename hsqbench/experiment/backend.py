@@ -26,10 +26,12 @@ ERROR_DETAIL_CHARS = 600
 
 
 def _config_text(name_or_path: str) -> str:
-    """The text of a config file given by name (configs/) or path."""
-    from hsqbench.config import resolve_config_path
+    """The resolved contents (``extends:`` applied) of a config given by name or path."""
+    import json
 
-    return resolve_config_path(name_or_path).read_text()
+    from hsqbench.config import load_config_data
+
+    return json.dumps(load_config_data(name_or_path), sort_keys=True)
 
 
 class TrialRunnerUnavailable(RuntimeError):

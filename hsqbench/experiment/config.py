@@ -34,6 +34,31 @@ YCB_OBJECTS = (
 )
 
 
+ALL = "all"
+
+
+def resolve_objects(
+    objects: tuple[str, ...] | str, exclude: tuple[str, ...], where: str
+) -> tuple[str, ...]:
+    """``objects`` as names: ``"all"`` is every YCB object of ``HSQ_YCB_DIR`` (``objects.csv``
+    order), so a user with a larger YCB download runs all of theirs; ``exclude`` is then taken out.
+
+    Raises:
+        ConfigError: another string than ``all``, or an excluded name the list does not hold (a
+            typo would otherwise let an object slip into the protocol).
+    """
+    if isinstance(objects, str):
+        if objects != ALL:
+            raise ConfigError(f"{where}: a list of names or {ALL!r}, got {objects!r}")
+        from hsqbench.assets.library import ycb_names
+
+        objects = tuple(ycb_names())
+    unknown = sorted(set(exclude) - set(objects))
+    if unknown:
+        raise ConfigError(f"{where}: exclude names {unknown}, which are not among the objects")
+    return tuple(o for o in objects if o not in exclude)
+
+
 def _check_objects(objects: tuple[str, ...], where: str) -> None:
     if not objects:
         raise ConfigError(f"{where}: the object list is empty")
@@ -51,15 +76,20 @@ class IsolatedConfig:
 
     Attributes:
         enabled: run this experiment at all.
-        objects: object names, as the trial runner knows them.
-        attempts_per_object: trials per object and base seed, each at its own random upright pose.
+        objects: object names, as the trial runner knows them, or ``"all"`` (every YCB object
+            of ``HSQ_YCB_DIR``); resolved to names when the config is made.
+        exclude: names taken out of ``objects`` (the paper's 15, for the unseen-object protocol).
+        attempts_per_object: trials per object and base seed, each at its own random pose.
     """
 
     enabled: bool = True
-    objects: tuple[str, ...] = YCB_OBJECTS
+    objects: tuple[str, ...] | str = YCB_OBJECTS
+    exclude: tuple[str, ...] = ()
     attempts_per_object: int = 10
 
     def __post_init__(self) -> None:
+        names = resolve_objects(self.objects, self.exclude, "isolated.objects")
+        object.__setattr__(self, "objects", names)
         _check_objects(self.objects, "isolated.objects")
         if self.attempts_per_object < 1:
             raise ConfigError(
@@ -72,18 +102,22 @@ class PackedConfig:
     """Packed scenes: ``rounds`` rounds, each of ``objects_per_round`` objects drawn from ``objects``.
 
     A round is run whole by the trial runner (it stops when the table is empty or after two
-    consecutive failed attempts, the paper's rule). A draw whose objects cannot be placed apart
+    consecutive failed attempts, the paper's rule). ``objects`` and ``exclude`` as for
+    :class:`IsolatedConfig`. A draw whose objects cannot be placed apart
     is replaced by the next draw of the same round's stream, up to ``max_draws`` draws (see
     :func:`hsqbench.experiment.seeds.draw_packed_round`).
     """
 
     enabled: bool = True
-    objects: tuple[str, ...] = YCB_OBJECTS
+    objects: tuple[str, ...] | str = YCB_OBJECTS
+    exclude: tuple[str, ...] = ()
     rounds: int = 15
     objects_per_round: int = 5
     max_draws: int = 10
 
     def __post_init__(self) -> None:
+        names = resolve_objects(self.objects, self.exclude, "packed.objects")
+        object.__setattr__(self, "objects", names)
         _check_objects(self.objects, "packed.objects")
         if self.rounds < 1:
             raise ConfigError(f"packed.rounds must be >= 1, got {self.rounds}")
@@ -137,6 +171,14 @@ class ExperimentConfig:
 
     def enabled_experiments(self) -> tuple[str, ...]:
         return tuple(e for e in EXPERIMENTS if getattr(self, e).enabled)
+
+    def object_names(self) -> tuple[str, ...]:
+        """Every object the enabled experiments use, each once, in first-use order (what a run
+        must build before it starts)."""
+        names: dict[str, None] = {}
+        for e in self.enabled_experiments():
+            names.update(dict.fromkeys(getattr(self, e).objects))
+        return tuple(names)
 
 
 def load_experiment_config(name_or_path: str | Path = "paper") -> ExperimentConfig:

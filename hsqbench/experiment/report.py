@@ -25,7 +25,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from hsqbench.experiment.reported import CITATION, PROVENANCE, reported_rows
+from hsqbench.experiment.graspable import (
+    cr_graspable,
+    gsr_graspable,
+    method_label,
+)
+from hsqbench.experiment.markdown import MEASURED, OUTCOME_COLUMNS, render_markdown
+from hsqbench.experiment.plots import plot_gsr_per_object, plot_outcomes, plot_planning_time
+from hsqbench.experiment.reported import PROVENANCE, reported_rows
 from hsqbench.experiment.results import (
     ATTEMPT_COLUMNS,
     ROUND_COLUMNS,
@@ -35,10 +42,6 @@ from hsqbench.experiment.results import (
     load_results,
 )
 from hsqbench.experiment.stats import Rate, summarize_times
-from hsqbench.sim.outcome import Outcome
-
-MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoCo backend
-OUTCOME_COLUMNS = (*[str(o) for o in Outcome], "error")
 
 TABLES_MD = "tables.md"
 TABLE1_CSV = "table1_isolated.csv"
@@ -181,20 +184,27 @@ def table1(data: RunData) -> pd.DataFrame:
     for r in reported_rows("isolated"):
         rows.append({"method": r.method, "source": PROVENANCE, "gsr_percent": r.gsr_percent})
     for p in data.planners:
-        rate = _gsr(_ok(data.attempts, "isolated", p), data.confidence)
+        ok = _ok(data.attempts, "isolated", p)
+        rate = _gsr(ok, data.confidence)
         errors = _errors(data.attempts, "isolated", p)
         if rate is None and not errors:
             continue
         cells = _rate_cells(rate)
+        g = _rate_cells(gsr_graspable(ok, data.confidence) if len(ok) else None)
         rows.append(
             {
-                "method": p,
+                "method": method_label(p),
                 "source": data.measured,
                 "gsr_percent": 100 * cells["rate"],
                 "ci_low_percent": 100 * cells["low"],
                 "ci_high_percent": 100 * cells["high"],
                 "successes": cells["successes"],
                 "attempts": cells["trials"],
+                "graspable_gsr_percent": 100 * g["rate"],
+                "graspable_ci_low_percent": 100 * g["low"],
+                "graspable_ci_high_percent": 100 * g["high"],
+                "graspable_successes": g["successes"],
+                "graspable_attempts": g["trials"],
                 "errors": errors,
             }
         )
@@ -207,16 +217,20 @@ def table1_per_object(data: RunData) -> pd.DataFrame:
     for obj in data.objects:
         for p in data.planners:
             df = _ok(data.attempts, "isolated", p)
-            rate = _gsr(df[df["objects"] == obj], data.confidence) if len(df) else None
+            mine = df[df["objects"] == obj] if len(df) else df
+            rate = _gsr(mine, data.confidence) if len(mine) else None
             if rate is None:
                 continue
             cells = _rate_cells(rate)
+            g = _rate_cells(gsr_graspable(mine, data.confidence))
             rows.append(
                 {
                     "object": obj,
                     "planner": p,
                     "successes": cells["successes"],
                     "attempts": cells["trials"],
+                    "graspable_successes": g["successes"],
+                    "graspable_attempts": g["trials"],
                     "gsr_percent": 100 * cells["rate"],
                     "ci_low_percent": 100 * cells["low"],
                     "ci_high_percent": 100 * cells["high"],
@@ -238,7 +252,8 @@ def table2(data: RunData) -> pd.DataFrame:
             }
         )
     for p in data.planners:
-        gsr = _gsr(_ok(data.attempts, "packed", p), data.confidence)
+        ok = _ok(data.attempts, "packed", p)
+        gsr = _gsr(ok, data.confidence)
         rounds = data.rounds
         if not rounds.empty:
             rounds = rounds[(rounds["planner"] == p) & (rounds["status"] == STATUS_OK)]
@@ -249,9 +264,11 @@ def table2(data: RunData) -> pd.DataFrame:
         if gsr is None and cr is None and not errors:
             continue
         g, c = _rate_cells(gsr), _rate_cells(cr)
+        gg = _rate_cells(gsr_graspable(ok, data.confidence) if len(ok) else None)
+        cg = _rate_cells(cr_graspable(rounds, data.confidence) if len(rounds) else None)
         rows.append(
             {
-                "method": p,
+                "method": method_label(p),
                 "source": data.measured,
                 "gsr_percent": 100 * g["rate"],
                 "gsr_ci_low_percent": 100 * g["low"],
@@ -263,6 +280,16 @@ def table2(data: RunData) -> pd.DataFrame:
                 "cr_ci_high_percent": 100 * c["high"],
                 "objects_cleared": c["successes"],
                 "objects_presented": c["trials"],
+                "graspable_gsr_percent": 100 * gg["rate"],
+                "graspable_gsr_ci_low_percent": 100 * gg["low"],
+                "graspable_gsr_ci_high_percent": 100 * gg["high"],
+                "graspable_successes": gg["successes"],
+                "graspable_attempts": gg["trials"],
+                "graspable_cr_percent": 100 * cg["rate"],
+                "graspable_cr_ci_low_percent": 100 * cg["low"],
+                "graspable_cr_ci_high_percent": 100 * cg["high"],
+                "graspable_objects_cleared": cg["successes"],
+                "graspable_objects_presented": cg["trials"],
                 "rounds": len(rounds),
                 "errors": errors,
             }
@@ -308,215 +335,6 @@ def time_table(data: RunData) -> pd.DataFrame:
                 }
             )
     return pd.DataFrame(rows)
-
-
-# -- markdown ---------------------------------------------------------------------------------
-
-
-def _md(headers: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(headers) + " |", "|" + "|".join(" --- " for _ in headers) + "|"]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines)
-
-
-def _pct(value: float) -> str:
-    return "" if value is None or not np.isfinite(value) else f"{value:.1f}"
-
-
-def _interval(row: pd.Series, prefix: str = "") -> str:
-    low, high = row.get(f"{prefix}ci_low_percent"), row.get(f"{prefix}ci_high_percent")
-    if low is None or not np.isfinite(low):
-        return "—"
-    return f"[{low:.1f}, {high:.1f}]"
-
-
-def render_markdown(
-    data: RunData,
-    t1: pd.DataFrame,
-    t1o: pd.DataFrame,
-    t2: pd.DataFrame,
-    outcomes: pd.DataFrame,
-    times: pd.DataFrame,
-) -> str:
-    """The human-readable report: both tables beside the paper's rows, outcomes, timings."""
-    conf = f"{100 * data.confidence:g} %"
-    meta = data.meta
-    versions = sorted(set(data.attempts["code_version"])) if len(data.attempts) else []
-    out = [f"# Benchmark results: {meta.get('run', '(run)')}", ""]
-    out.append(
-        f"Config `{meta.get('config_name', '?')}` (hash `{meta.get('config_hash', '?')}`), "
-        f"code {', '.join(f'`{v}`' for v in versions) or '?'}, base seeds "
-        f"{meta.get('config', {}).get('seeds', '?')}. Intervals: Wilson, {conf}."
-    )
-    out.append("")
-    n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0
-    if n_err:
-        out += [
-            f"**Warning: {n_err} trial(s) failed with an infrastructure error** (column `errors`); "
-            "they are not attempts and are left out of GSR and CR. Resume the run with "
-            "`--retry-errors` once the cause is fixed.",
-            "",
-        ]
-    out += [f"Note: {n}." for n in data.notes] + ([""] if data.notes else [])
-
-    out += ["## Table I: isolated objects, GSR (%)", ""]
-    rows = []
-    for _, r in t1.iterrows():
-        measured = r["source"] == data.measured
-        rows.append(
-            [
-                str(r["method"]),
-                _pct(r["gsr_percent"]),
-                _interval(r) if measured else "—",
-                f"{int(r['successes'])}/{int(r['attempts'])}" if measured else "—",
-                str(int(r["errors"])) if measured else "—",
-                str(r["source"]),
-            ]
-        )
-    out += [_md(["method", "GSR", f"{conf} CI", "k/n", "errors", "source"], rows), ""]
-
-    if not t1o.empty:
-        out += ["### Isolated GSR per object (successes/attempts, %)", ""]
-        planners = [p for p in data.planners if p in set(t1o["planner"])]
-        rows = []
-        for obj in data.objects:
-            sub = t1o[t1o["object"] == obj].set_index("planner")
-            cells = [obj]
-            for p in planners:
-                if p in sub.index:
-                    r = sub.loc[p]
-                    cells.append(
-                        f"{int(r['successes'])}/{int(r['attempts'])} ({r['gsr_percent']:.0f})"
-                    )
-                else:
-                    cells.append("—")
-            rows.append(cells)
-        out += [_md(["object", *planners], rows), ""]
-
-    out += ["## Table II: packed scenes, GSR and CR (%)", ""]
-    rows = []
-    for _, r in t2.iterrows():
-        measured = r["source"] == data.measured
-        rows.append(
-            [
-                str(r["method"]),
-                _pct(r["gsr_percent"]),
-                _interval(r, "gsr_") if measured else "—",
-                _pct(r["cr_percent"]),
-                _interval(r, "cr_") if measured else "—",
-                f"{int(r['rounds'])}" if measured else "—",
-                str(int(r["errors"])) if measured else "—",
-                str(r["source"]),
-            ]
-        )
-    headers = ["method", "GSR", f"GSR {conf} CI", "CR", f"CR {conf} CI", "rounds", "errors"]
-    out += [_md([*headers, "source"], rows), ""]
-
-    if not outcomes.empty:
-        out += ["## Outcomes per planner (attempt counts; `error` = trials that could not run)", ""]
-        cols = [c for c in OUTCOME_COLUMNS if outcomes[c].sum() > 0 or c == "success"]
-        rows = [
-            [r["experiment"], r["planner"], *[str(int(r[c])) for c in cols]]
-            for _, r in outcomes.iterrows()
-        ]
-        out += [_md(["experiment", "planner", *cols], rows), ""]
-
-    if not times.empty:
-        out += ["## Planning time per attempt (s)", ""]
-        rows = [
-            [
-                r["experiment"],
-                r["planner"],
-                str(int(r["n"])),
-                f"{r['median_s']:.3f}",
-                f"{r['p90_s']:.3f}",
-                f"{r['max_s']:.3f}",
-            ]
-            for _, r in times.iterrows()
-        ]
-        out += [_md(["experiment", "planner", "n", "median", "p90", "max"], rows), ""]
-
-    out += [
-        "## Notes",
-        "",
-        "- GSR = successful attempts / attempts (an attempt where no grasp was found counts as "
-        "a failed attempt); CR = objects removed / objects presented, summed over rounds.",
-        "- The CR interval treats the objects of a round as independent; it is optimistic.",
-        f'- "{PROVENANCE}": {CITATION}; the baselines\' numbers come from other robots and '
-        "setups, quoted by the paper. They are context, not a like-for-like comparison.",
-        f'- "{data.measured}": this run'
-        + (", MuJoCo simulation." if data.measured == MEASURED else ", NOT a simulation."),
-        "",
-    ]
-    return "\n".join(out)
-
-
-# -- plots ------------------------------------------------------------------------------------
-
-
-def _figure(width: float, height: float) -> Any:
-    from matplotlib.figure import Figure  # Agg canvas, no pyplot global state
-
-    return Figure(figsize=(width, height), dpi=110, layout="constrained")
-
-
-def plot_gsr_per_object(data: RunData, t1o: pd.DataFrame, path: Path) -> None:
-    fig = _figure(max(6.0, 0.7 * len(data.objects) + 2), 4.2)
-    ax = fig.add_subplot()
-    planners = [p for p in data.planners if p in set(t1o["planner"])]
-    width = 0.8 / max(1, len(planners))
-    x = np.arange(len(data.objects))
-    for i, p in enumerate(planners):
-        sub = t1o[t1o["planner"] == p].set_index("object").reindex(data.objects)
-        y = sub["gsr_percent"].to_numpy(dtype=float)
-        err = np.vstack(
-            [
-                y - sub["ci_low_percent"].to_numpy(dtype=float),
-                sub["ci_high_percent"].to_numpy(dtype=float) - y,
-            ]
-        )
-        ax.bar(x + (i - (len(planners) - 1) / 2) * width, y, width, yerr=err, capsize=2, label=p)
-    ax.set_xticks(x, data.objects, rotation=45, ha="right")
-    ax.set_ylabel("GSR (%)")
-    ax.set_ylim(0, 118)  # headroom for the legend above the 100 % bars
-    ax.set_title(f"Isolated GSR per object ({100 * data.confidence:g} % Wilson intervals)")
-    ax.legend(fontsize="small", ncols=max(1, len(planners)), loc="upper left")
-    fig.savefig(path)
-
-
-def plot_outcomes(outcomes: pd.DataFrame, path: Path) -> None:
-    fig = _figure(max(5.0, 1.0 * len(outcomes) + 3), 4.2)
-    ax = fig.add_subplot()
-    labels = [f"{r['planner']}\n{r['experiment']}" for _, r in outcomes.iterrows()]
-    bottom = np.zeros(len(outcomes))
-    for col in OUTCOME_COLUMNS:
-        values = outcomes[col].to_numpy(dtype=float)
-        if values.sum() == 0:
-            continue
-        ax.bar(labels, values, bottom=bottom, label=col)
-        bottom += values
-    ax.set_ylabel("attempts (error: trials)")
-    ax.set_title("Outcome breakdown")
-    ax.legend(fontsize="small", loc="center left", bbox_to_anchor=(1.0, 0.5))
-    fig.savefig(path)
-
-
-def plot_planning_time(data: RunData, path: Path) -> None:
-    ok = data.attempts[data.attempts["status"] == STATUS_OK]
-    planners, series = [], []
-    for p in data.planners:
-        t = ok.loc[ok["planner"] == p, "planning_s"].to_numpy(dtype=float)
-        t = t[np.isfinite(t)]
-        if t.size:
-            planners.append(p)
-            series.append(t)
-    fig = _figure(max(4.0, 1.2 * len(planners) + 2), 4.0)
-    ax = fig.add_subplot()
-    ax.boxplot(series, showfliers=True)
-    ax.set_xticks(np.arange(1, len(planners) + 1), planners)
-    ax.set_ylabel("planning time per attempt (s)")
-    ax.set_title("Planning time (both experiments)")
-    fig.savefig(path)
 
 
 def write_report(run_dir: str | Path) -> list[Path]:

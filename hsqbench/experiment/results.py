@@ -56,7 +56,10 @@ ATTEMPT_COLUMNS = (
     "status",
     "outcome",
     "success",
+    "graspable",
     "target",
+    "object_pose",
+    "resting_pose",
     "rank_executed",
     "n_grasps",
     "score",
@@ -85,6 +88,8 @@ ROUND_COLUMNS = (
     "objects_cleared",
     "n_cleared",
     "clearance_rate",
+    "objects_graspable",
+    "n_graspable",
     "n_attempts",
     "n_success",
     "status",
@@ -177,7 +182,10 @@ def rows_for(
                     "status": STATUS_OK,
                     "outcome": str(a.outcome),
                     "success": a.success,
+                    "graspable": a.graspable,
                     "target": a.target,
+                    "object_pose": " ".join(repr(float(x)) for x in a.object_pose),
+                    "resting_pose": a.resting_pose,
                     "rank_executed": a.rank_executed,
                     "n_grasps": a.n_grasps,
                     "score": float(a.score),
@@ -200,6 +208,12 @@ def rows_for(
             "objects_cleared": ";".join(result.objects_cleared),
             "n_cleared": len(result.objects_cleared),
             "clearance_rate": result.clearance_rate,
+            "objects_graspable": (
+                None if result.objects_graspable is None else ";".join(result.objects_graspable)
+            ),
+            "n_graspable": (
+                None if result.objects_graspable is None else len(result.objects_graspable)
+            ),
             "n_attempts": len(result.attempts),
             "n_success": sum(a.success for a in result.attempts),
             "status": STATUS_OK,
@@ -257,8 +271,11 @@ class ParsedFile:
     partial_tail: bool = False
 
 
-def read_rows(path: Path, columns: tuple[str, ...]) -> ParsedFile:
+def read_rows(path: Path, columns: tuple[str, ...], allow_older: bool = False) -> ParsedFile:
     """Parse a results CSV, dropping a trailing partial line (a write cut by a kill).
+
+    ``allow_older``: a file written by an earlier version, whose columns are a subset of
+    ``columns``, is read with the missing columns empty (for reports; never for appending).
 
     Raises:
         ResultsError: the header differs from ``columns`` or a complete line is malformed.
@@ -273,19 +290,21 @@ def read_rows(path: Path, columns: tuple[str, ...]) -> ParsedFile:
     if not lines:
         return ParsedFile([], partial)
     header = next(csv.reader([lines[0]]))
-    if tuple(header) != columns:
+    older = allow_older and set(header) < set(columns)
+    if tuple(header) != columns and not older:
         raise ResultsError(
             f"{path}: its columns differ from this version's ({len(header)} vs {len(columns)} "
             "columns); it was written by another version of hsqbench: use a new --run name"
         )
     rows = []
+    blank = dict.fromkeys(columns, "")
     for lineno, fields in enumerate(csv.reader(lines[1:]), start=2):
-        if len(fields) != len(columns):
+        if len(fields) != len(header):
             raise ResultsError(
-                f"{path}:{lineno}: malformed row ({len(fields)} fields, expected {len(columns)}); "
+                f"{path}:{lineno}: malformed row ({len(fields)} fields, expected {len(header)}); "
                 "the file was edited or written by two processes at once"
             )
-        rows.append(dict(zip(columns, fields, strict=True)))
+        rows.append({**blank, **dict(zip(header, fields, strict=True))})
     return ParsedFile(rows, partial)
 
 
@@ -357,10 +376,11 @@ def _complete_copy(rows: list[dict[str, str]]) -> list[dict[str, str]] | None:
 
 
 def load_results(run_dir: str | Path) -> RunResults:
-    """Read a run's results files (read only), keeping complete trials once each."""
+    """Read a run's results files (read only), keeping complete trials once each; files of an
+    earlier version (fewer columns) are read with the new columns empty."""
     run_dir = Path(run_dir)
-    att = read_rows(run_dir / ATTEMPTS_FILE, ATTEMPT_COLUMNS)
-    rnd = read_rows(run_dir / ROUNDS_FILE, ROUND_COLUMNS)
+    att = read_rows(run_dir / ATTEMPTS_FILE, ATTEMPT_COLUMNS, allow_older=True)
+    rnd = read_rows(run_dir / ROUNDS_FILE, ROUND_COLUMNS, allow_older=True)
     results = collect(att.rows, rnd.rows)
     results.partial_tail = att.partial_tail or rnd.partial_tail
     return results

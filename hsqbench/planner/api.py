@@ -94,6 +94,8 @@ class PlanningContext:
             the support test at contacts none of them can see).
         workspace_bounds: ``(lower (3,), upper (3,))`` corners of the workspace box, metres, if
             known (ignored by the hsq planner).
+        truth: simulator truth (:class:`~hsqbench.planner.truth.SceneTruth`), given only to
+            planners that declare ``privileged = True`` (the oracle); None for every other.
     """
 
     support_plane: tuple[float, float, float, float] | None = None
@@ -101,6 +103,7 @@ class PlanningContext:
     seed: int | None = None
     camera_positions: NDArray[np.float64] | None = None
     workspace_bounds: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    truth: Any = None
 
     def __post_init__(self) -> None:
         plane = validate_plane(self.support_plane)
@@ -322,7 +325,8 @@ def plan_grasps(
 
     Before both stages the cloud is thinned to 2 mm voxel centroids and isolated points (flying
     pixels) are removed (``cleaning:`` in the config, :mod:`hsqbench.planner.cleaning`; our
-    addition): stage two then checks collisions against the cleaned cloud. ``hidden_superquadrics[i].inliers`` index ``points`` as given.
+    addition): stage two then checks collisions against the cleaned cloud.
+    ``hidden_superquadrics[i].inliers`` index ``points`` as given.
 
     Args:
         points: (N, 3) cloud of the object (or packed scene), world metres, table removed.

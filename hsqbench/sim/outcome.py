@@ -38,6 +38,11 @@ class Attempt:
         width_m: planned opening width of the executed grasp, metres.
         perception_s, planning_s, execution_s: wall-clock seconds of each phase.
         detail: a short human-readable reason (which IK failed, which contact was hit, ...).
+        graspable: whether the oracle (:mod:`hsqbench.planner.oracle`, from the true meshes)
+            found a feasible grasp in this presentation; None when not checked.
+        object_pose: (x, y, z, qw, qx, qy, qz) of ``target`` (of the only object when there is
+            no target) when the cloud was taken; empty when unknown.
+        resting_pose: index of that object's resting pose in the scene (-1: upright).
     """
 
     outcome: Outcome
@@ -51,6 +56,9 @@ class Attempt:
     planning_s: float = 0.0
     execution_s: float = 0.0
     detail: str = ""
+    graspable: bool | None = None
+    object_pose: tuple[float, ...] = ()
+    resting_pose: int = -1
 
     @property
     def success(self) -> bool:
@@ -88,13 +96,18 @@ class TrialResult:
 
 @dataclass
 class RoundResult:
-    """A packed round: attempts until the workspace is empty or two consecutive failures."""
+    """A packed round: attempts until the workspace is empty or two consecutive failures.
+
+    ``objects_graspable``: the objects on which the oracle found a feasible grasp in the
+    settled scene, before the first attempt (None when not checked).
+    """
 
     objects: list[str]
     seed: int
     planner: str
     attempts: list[Attempt]
     objects_cleared: list[str]
+    objects_graspable: list[str] | None = None
 
     @property
     def objects_presented(self) -> int:
@@ -112,5 +125,6 @@ class RoundResult:
             "planner": self.planner,
             "objects_presented": self.objects_presented,
             "objects_cleared": list(self.objects_cleared),
+            "objects_graspable": self.objects_graspable,
             "attempts": [a.to_dict() for a in self.attempts],
         }

@@ -24,6 +24,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import mujoco
 import numpy as np
@@ -90,11 +91,28 @@ class ViewerCameraConfig:
 
 @dataclass(frozen=True)
 class PlacementConfig:
+    """How objects are put on the table (reasons in ``configs/scene.yaml``).
+
+    ``pose``: ``upright`` (the mesh's own up, the paper's protocol) or ``resting`` (one of the
+    object's stable resting poses, drawn by probability, :mod:`hsqbench.assets.resting`; poses
+    less likely than ``min_resting_probability`` are not drawn). Either way a random yaw and
+    position follow.
+    """
+
     n_packed: int = 5
     margin_m: float = 0.02
     max_tries_per_object: int = 300
     max_scene_attempts: int = 20
     drop_height_m: float = 0.002
+    pose: Literal["upright", "resting"] = "upright"
+    min_resting_probability: float = 0.01
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.min_resting_probability < 1.0:
+            raise ValueError(
+                f"placement.min_resting_probability must be in [0, 1), got "
+                f"{self.min_resting_probability}"
+            )
 
 
 @dataclass(frozen=True)
@@ -148,6 +166,8 @@ class SceneInfo:
         settle_time_s: simulated time the settling took; ``max_speed_after_settle``: largest
             object speed (m/s or rad/s) at its end.
         build_time_s: wall-clock time of :func:`build_scene`.
+        resting_poses: object name -> index of the resting pose drawn
+            (:func:`hsqbench.assets.resting.resting_poses`, most probable first), -1 upright.
     """
 
     kind: str
@@ -178,6 +198,7 @@ class SceneInfo:
     settle_time_s: float = 0.0
     max_speed_after_settle: float = 0.0
     build_time_s: float = 0.0
+    resting_poses: dict[str, int] = field(default_factory=dict)
 
     @property
     def camera_names(self) -> tuple[str, ...]:
@@ -249,23 +270,62 @@ def min_area_rectangle(points_xy: np.ndarray) -> Footprint:
     return Footprint(np.array([width[k], height[k]]), centre, float(angles[k]))
 
 
-def object_footprint(asset: ObjectLike) -> Footprint:
-    """Oriented footprint from the collision hulls; the axis-aligned box when there are none."""
+def object_footprint(asset: ObjectLike, rotation: np.ndarray | None = None) -> Footprint:
+    """Oriented footprint from the collision hulls (turned by ``rotation``, a resting pose, when
+    given); the axis-aligned box when there are no hulls."""
     paths = tuple(str(p) for p in asset.collision_meshes)
     if not paths:
         e = np.asarray(asset.extents[:2], dtype=float)
         return Footprint(e, np.zeros(2), 0.0)
-    return _hull_footprint(paths, tuple(os.stat(p).st_mtime_ns for p in paths))
+    rot = None if rotation is None else tuple(np.asarray(rotation, float).ravel())
+    return _hull_footprint(paths, tuple(os.stat(p).st_mtime_ns for p in paths), rot)
 
 
-@functools.lru_cache(maxsize=64)
-def _hull_footprint(paths: tuple[str, ...], mtimes_ns: tuple[int, ...]) -> Footprint:
-    # Cached per hull files and their modification times: checking many packed draws
-    # (hsqbench.experiment.seeds) reuses the 15 objects' footprints instead of reloading hulls.
+@functools.lru_cache(maxsize=256)
+def _hull_vertices(paths: tuple[str, ...], mtimes_ns: tuple[int, ...]) -> np.ndarray:
     import trimesh
 
-    meshes = [trimesh.load(path, force="mesh", process=False) for path in paths]
-    return min_area_rectangle(np.concatenate([m.vertices[:, :2] for m in meshes]))
+    return np.concatenate(
+        [trimesh.load(path, force="mesh", process=False).vertices for path in paths]
+    )
+
+
+@functools.lru_cache(maxsize=256)
+def _hull_footprint(
+    paths: tuple[str, ...], mtimes_ns: tuple[int, ...], rotation: tuple[float, ...] | None
+) -> Footprint:
+    # Cached per hull files, their modification times and the pose: checking many packed draws
+    # (hsqbench.experiment.seeds) reuses the objects' footprints instead of reloading hulls.
+    vertices = _hull_vertices(paths, mtimes_ns)
+    if rotation is not None:
+        vertices = vertices @ np.asarray(rotation).reshape(3, 3).T
+    return min_area_rectangle(vertices[:, :2])
+
+
+def rested_base_z(asset: ObjectLike, rotation: np.ndarray) -> float:
+    """Lowest point of the hulls turned by ``rotation``, object frame (0 for the identity)."""
+    paths = tuple(str(p) for p in asset.collision_meshes)
+    if not paths:
+        return 0.0
+    vertices = _hull_vertices(paths, tuple(os.stat(p).st_mtime_ns for p in paths))
+    return float((vertices @ np.asarray(rotation, float)[2]).min())
+
+
+def draw_rests(
+    assets: Sequence[ObjectLike], placement: PlacementConfig, rng: np.random.Generator
+) -> list[tuple[int, np.ndarray]] | None:
+    """Each object's resting pose (index, rotation) drawn by probability; None when upright
+    (nothing is drawn then, so upright scenes keep the random stream they always had)."""
+    if placement.pose == "upright":
+        return None
+    from hsqbench.assets.resting import resting_poses
+
+    out = []
+    for asset in assets:
+        poses = resting_poses(asset, placement.min_resting_probability)
+        k = poses.draw(rng)
+        out.append((k, poses.rotations[k]))
+    return out
 
 
 def footprint_corners(extents_xy: np.ndarray, xy: np.ndarray, yaw: float) -> np.ndarray:
@@ -534,12 +594,16 @@ def _resolve_objects(
 
 
 def layout_objects(
-    assets: Sequence[ObjectLike], cfg: SceneConfig, rng: np.random.Generator
+    assets: Sequence[ObjectLike],
+    cfg: SceneConfig,
+    rng: np.random.Generator,
+    rests: Sequence[tuple[int, np.ndarray]] | None = None,
 ) -> list[tuple[np.ndarray, float]]:
     """Object origins (x, y) and yaws (rad) with the footprints apart inside the workspace.
 
     The placement of :func:`build_scene`, without a MuJoCo model: oriented footprints from the
-    collision hulls (:func:`object_footprint`), then :func:`place_objects`.
+    collision hulls (:func:`object_footprint`, each turned by its resting pose in ``rests``),
+    then :func:`place_objects`.
 
     Raises:
         PlacementError: no layout was found (see :func:`place_objects`).
@@ -547,7 +611,8 @@ def layout_objects(
     ws = cfg.workspace
     lo = np.asarray(ws.centre_xy_m) - np.asarray(ws.size_m) / 2
     hi = np.asarray(ws.centre_xy_m) + np.asarray(ws.size_m) / 2
-    prints = [object_footprint(a) for a in assets]
+    rotations = [None] * len(assets) if rests is None else [r for _, r in rests]
+    prints = [object_footprint(a, r) for a, r in zip(assets, rotations, strict=True)]
     rect_poses = place_objects(
         [f.extents_xy for f in prints], [a.name for a in assets], lo, hi, cfg.placement, rng
     )
@@ -567,8 +632,9 @@ def packed_placeable(
     cfg = scene_config or load_scene_config()
     rng = np.random.default_rng(seed)
     assets = _resolve_objects("packed", objects, cfg.placement.n_packed, rng)
+    rests = draw_rests(assets, cfg.placement, rng)
     try:
-        layout_objects(assets, cfg, rng)
+        layout_objects(assets, cfg, rng, rests)
     except PlacementError:
         return False
     return True
@@ -580,23 +646,33 @@ def compose_scene(
     cfg: SceneConfig,
     robot: RobotConfig,
     physics: PhysicsConfig,
+    rests: Sequence[tuple[int, np.ndarray]] | None = None,
 ) -> mujoco.MjSpec:
-    """The scene spec: static parts, the robot at the origin, objects at (xy, yaw)."""
+    """The scene spec: static parts, the robot at the origin, objects at (xy, yaw), each first
+    turned into its resting pose when ``rests`` is given."""
     spec = mujoco.MjSpec()
     spec.modelname = "hsqbench_scene"
     apply_physics(spec, physics)
     _add_static(spec, cfg, physics)
     spec.attach(load_panda_spec(robot), prefix=robot.prefix, frame=spec.worldbody.add_frame())
     z = cfg.placement.drop_height_m
-    for asset, (xy, yaw) in zip(assets, poses, strict=True):
-        quat = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
+    for i, (asset, (xy, yaw)) in enumerate(zip(assets, poses, strict=True)):
+        quat = np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])
+        height = z
+        if rests is not None:
+            rotation = rests[i][1]
+            rest = np.zeros(4)
+            mujoco.mju_mat2Quat(rest, np.ascontiguousarray(rotation, float).ravel())
+            turned = np.zeros(4)
+            mujoco.mju_mulQuat(turned, quat, rest)
+            quat, height = turned, z - rested_base_z(asset, rotation)
         add_object_body(
             spec.worldbody,
             spec,
             asset,
             OBJECT_PREFIX + asset.name,
-            np.array([xy[0], xy[1], z]),
-            np.array(quat),
+            np.array([xy[0], xy[1], height]),
+            quat,
             physics.objects,
         )
     return spec
@@ -654,8 +730,9 @@ def build_scene(
     physics = physics_config or load_physics_config()
     rng = np.random.default_rng(seed)
     assets = _resolve_objects(kind, objects, cfg.placement.n_packed, rng)
-    poses = layout_objects(assets, cfg, rng)
-    spec = compose_scene(assets, poses, cfg, robot, physics)
+    rests = draw_rests(assets, cfg.placement, rng)
+    poses = layout_objects(assets, cfg, rng, rests)
+    spec = compose_scene(assets, poses, cfg, robot, physics, rests)
     spec.add_key(name=INITIAL_KEY)
     model = spec.compile()
     data = mujoco.MjData(model)
@@ -674,6 +751,9 @@ def build_scene(
     model.key_time[key] = 0.0
     info = _describe(model, data, cfg, robot, kind, seed, names, bodies, body_ids, panda)
     info.settle_time_s, info.max_speed_after_settle = settle_s, speed
+    info.resting_poses = {
+        a.name: (-1 if rests is None else int(rests[i][0])) for i, a in enumerate(assets)
+    }
     info.reset(model, data)
     info.build_time_s = time.perf_counter() - t0
     return model, data, info

@@ -96,7 +96,7 @@ TIE_WINDOW = 8
 EASY_APPROACH_OUTWARD = 0.4
 
 #: Independent random streams drawn from a trial's seed.
-_STREAMS = ("perception_calibration", "perception_noise", "ik", "planner")
+_STREAMS = ("perception_calibration", "perception_noise", "ik", "planner", "oracle")
 
 
 @dataclass(frozen=True)
@@ -173,6 +173,8 @@ class TrialConfig:
         perception: config name of the cameras' perception (``sensor: cameras``).
         surface: settings of the stand-in (``sensor: surface``).
         planner_config: config handed to ``get_planner`` (None: the planner's default).
+        graspability: oracle config (``configs/oracle.yaml``) with which every attempt checks
+            whether the presentation is graspable at all (``Attempt.graspable``); None: no check.
         max_ranks: grasps tried in score order before an attempt is ``unreachable``.
         min_cloud_points: fewer perceived points than this: nothing to grasp.
         execution, ik, motion, judge, packed: see their classes.
@@ -185,6 +187,7 @@ class TrialConfig:
     perception: str = "perception"
     surface: SurfaceSensorConfig = field(default_factory=SurfaceSensorConfig)
     planner_config: str | None = None
+    graspability: str | None = "oracle"
     max_ranks: int = 48
     min_cloud_points: int = 30
     execution: ExecutionConfig = field(default_factory=ExecutionConfig)
@@ -253,6 +256,7 @@ class TrialEnv:
         self.stepper = Stepper(model, data, self.panda, config.motion, recorder)
         self.removed: set[str] = set()
         self._sensor: Any = None
+        self._oracle: Any = None
 
     @classmethod
     def build(
@@ -328,6 +332,34 @@ class TrialEnv:
             self._sensor.objects = {n: a for n, a in self.assets.items() if n not in self.removed}
         mujoco.mj_forward(self.model, self.data)
         return self._sensor.observe(self.data, self.rngs["perception_noise"])
+
+    # ---- truth (the oracle's; never a perceiving planner's) ------------------------------------
+    def truth(self) -> Any:
+        """The true hulls of the objects on the table now (:mod:`hsqbench.sim.scene_truth`)."""
+        from hsqbench.sim.scene_truth import scene_truth
+
+        names = self.objects_on_table()
+        return scene_truth(
+            self.model, self.data, self.info.object_geom_ids, names, self.info.support_plane
+        )
+
+    def graspable_objects(self, truth: Any) -> list[str] | None:
+        """Objects on which the oracle finds a feasible grasp (None: the check is off)."""
+        if self.config.graspability is None:
+            return None
+        from hsqbench.planner.oracle import OraclePlanner, feasible_grasps
+
+        if self._oracle is None:
+            self._oracle = OraclePlanner(self.config.graspability)
+        seed = int(self.rngs["oracle"].integers(2**31))
+        counts = feasible_grasps(truth, self._oracle.gripper, self._oracle.config, seed)
+        return [n for n, c in counts.items() if c > 0]
+
+    def object_pose(self, name: str) -> tuple[float, ...]:
+        """(x, y, z, qw, qx, qy, qz) of an object now."""
+        body = self.info.object_body_ids[name]
+        adr = self.model.jnt_qposadr[self.model.body_jntadr[body]]
+        return tuple(float(x) for x in self.data.qpos[adr : adr + 7])
 
     # ---- scene bookkeeping ---------------------------------------------------------------------
     def objects_on_table(self) -> list[str]:
@@ -806,6 +838,8 @@ class AttemptTrace:
         flipped: the executed grasp was the twin turned by pi.
         scene_build_s: wall seconds of building the scene (first attempt of a trial or round;
             0 for later attempts). The first ``perception_s`` includes making the sensor.
+        graspable_objects: objects on the table with a feasible oracle grasp at this attempt
+            (None: not checked).
     """
 
     n_points: int = 0
@@ -816,6 +850,7 @@ class AttemptTrace:
     ranks_tried: int = 0
     flipped: bool = False
     scene_build_s: float = 0.0
+    graspable_objects: list[str] | None = None
 
 
 def resolve_planner(planner: Any, config: TrialConfig) -> Any:
@@ -847,11 +882,21 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
     perception_s = time.perf_counter() - t0
     if rec.enabled:
         rec.on_observation(obs)
-    if len(points) < cfg.min_cloud_points:
+    truth = env.truth()
+    trace.graspable_objects = env.graspable_objects(truth)
+    presented = {
+        "graspable": None if trace.graspable_objects is None else bool(trace.graspable_objects)
+    }
+    if len(env.info.objects) == 1:
+        only = env.info.objects[0]
+        presented["object_pose"] = env.object_pose(only)
+        presented["resting_pose"] = env.info.resting_poses.get(only, -1)
+    if len(points) < cfg.min_cloud_points and not getattr(planner, "privileged", False):
         attempt = Attempt(
             Outcome.NO_GRASP_FOUND,
             perception_s=perception_s,
             detail=f"the cloud has {len(points)} points (fewer than {cfg.min_cloud_points})",
+            **presented,
         )
         rec.on_outcome(attempt) if rec.enabled else None
         return attempt, trace
@@ -863,13 +908,19 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
         seed=int(env.rngs["planner"].integers(2**31)),
         camera_positions=np.asarray(obs.camera_positions),
         workspace_bounds=(np.asarray(env.info.workspace_min), np.asarray(env.info.workspace_max)),
+        truth=truth if getattr(planner, "privileged", False) else None,
     )
     plan = planner.plan(points, context)
     planning_s = time.perf_counter() - t0
     if rec.enabled:
         rec.on_plan(plan)
     grasps = plan.grasps
-    common = {"n_grasps": len(grasps), "perception_s": perception_s, "planning_s": planning_s}
+    common = {
+        "n_grasps": len(grasps),
+        "perception_s": perception_s,
+        "planning_s": planning_s,
+        **presented,
+    }
     if not len(grasps):
         attempt = Attempt(
             Outcome.NO_GRASP_FOUND, detail=plan.reason or "the planner returned no grasp", **common
@@ -898,6 +949,16 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
     trace.ik_s = time.perf_counter() - t0
     top = grasps[0]
     intended = env.probe.nearest_object(d, np.asarray(top.position))
+
+    def pose_of(name: str) -> dict[str, Any]:
+        # The target's pose as perceived (nothing has moved yet); isolated scenes have it already.
+        if "object_pose" in presented or not name:
+            return {}
+        return {
+            "object_pose": env.object_pose(name),
+            "resting_pose": env.info.resting_poses.get(name, -1),
+        }
+
     if motion is None:
         attempt = Attempt(
             Outcome.UNREACHABLE,
@@ -908,6 +969,7 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
             execution_s=trace.ik_s,
             detail=reasons[0] if len(reasons) == 1 else f"{len(reasons)} grasps: {reasons[0]}",
             **common,
+            **pose_of(intended),
         )
         rec.on_outcome(attempt) if rec.enabled else None
         return attempt, trace
@@ -917,6 +979,7 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
     if rec.enabled:
         rec.on_grasp(grasp, rank)
     intended = env.probe.nearest_object(d, np.asarray(grasp.position))
+    common.update(pose_of(intended))
     t1 = time.perf_counter()
     try:
         res = execute_grasp(env, motion, intended)
@@ -1012,6 +1075,7 @@ def run_packed_round(
     plan = resolve_planner(planner, cfg)
     attempts: list[Attempt] = []
     cleared: list[str] = []
+    graspable: list[str] | None = None
     with TrialEnv.build("packed", objects, seed, cfg, recorder) as env:
         failures = 0
         for i in range(cfg.packed.max_attempts):
@@ -1020,6 +1084,7 @@ def run_packed_round(
             attempt, trace = run_attempt(env, plan, packed=True)
             if i == 0:
                 trace.scene_build_s = env.info.build_time_s
+                graspable = trace.graspable_objects
             attempts.append(attempt)
             if traces is not None:
                 traces.append(trace)
@@ -1048,4 +1113,5 @@ def run_packed_round(
         planner=_planner_name(planner),
         attempts=attempts,
         objects_cleared=cleared,
+        objects_graspable=graspable,
     )

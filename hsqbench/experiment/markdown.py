@@ -1,0 +1,206 @@
+"""The human-readable report of a run (``tables.md``): both tables beside the paper's rows,
+outcomes and timings (definitions in :mod:`hsqbench.experiment.report`)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from hsqbench.experiment.graspable import PRIVILEGED_NOTE, has_graspability
+from hsqbench.experiment.reported import CITATION, PROVENANCE
+from hsqbench.experiment.results import STATUS_ERROR
+from hsqbench.sim.outcome import Outcome
+
+if TYPE_CHECKING:
+    from hsqbench.experiment.report import RunData
+
+MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoCo backend
+OUTCOME_COLUMNS = (*[str(o) for o in Outcome], "error")
+
+
+def _md(headers: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(headers) + " |", "|" + "|".join(" --- " for _ in headers) + "|"]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _pct(value: float) -> str:
+    return "" if value is None or not np.isfinite(value) else f"{value:.1f}"
+
+
+def _kn(row: pd.Series, k: str, n: str) -> str:
+    return f"{int(row[k])}/{int(row[n])}" if np.isfinite(row.get(n, np.nan)) else "—"
+
+
+def _interval(row: pd.Series, prefix: str = "") -> str:
+    low, high = row.get(f"{prefix}ci_low_percent"), row.get(f"{prefix}ci_high_percent")
+    if low is None or not np.isfinite(low):
+        return "—"
+    return f"[{low:.1f}, {high:.1f}]"
+
+
+def render_markdown(
+    data: RunData,
+    t1: pd.DataFrame,
+    t1o: pd.DataFrame,
+    t2: pd.DataFrame,
+    outcomes: pd.DataFrame,
+    times: pd.DataFrame,
+) -> str:
+    """The human-readable report: both tables beside the paper's rows, outcomes, timings."""
+    conf = f"{100 * data.confidence:g} %"
+    meta = data.meta
+    versions = sorted(set(data.attempts["code_version"])) if len(data.attempts) else []
+    out = [f"# Benchmark results: {meta.get('run', '(run)')}", ""]
+    out.append(
+        f"Config `{meta.get('config_name', '?')}` (hash `{meta.get('config_hash', '?')}`), "
+        f"code {', '.join(f'`{v}`' for v in versions) or '?'}, base seeds "
+        f"{meta.get('config', {}).get('seeds', '?')}. Intervals: Wilson, {conf}."
+    )
+    out.append("")
+    n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0
+    if n_err:
+        out += [
+            f"**Warning: {n_err} trial(s) failed with an infrastructure error** (column `errors`); "
+            "they are not attempts and are left out of GSR and CR. Resume the run with "
+            "`--retry-errors` once the cause is fixed.",
+            "",
+        ]
+    out += [f"Note: {n}." for n in data.notes] + ([""] if data.notes else [])
+
+    graspability = has_graspability(data.attempts)
+    out += ["## Table I: isolated objects, GSR (%)", ""]
+    if graspability:
+        out += [
+            "Over all presentations, and over the graspable ones (the oracle found a feasible "
+            "grasp on the true meshes at that pose).",
+            "",
+        ]
+    rows = []
+    for _, r in t1.iterrows():
+        measured = r["source"] == data.measured
+        extra = []
+        if graspability:
+            extra = [
+                _pct(r["graspable_gsr_percent"]) if measured else "—",
+                _interval(r, "graspable_") if measured else "—",
+                _kn(r, "graspable_successes", "graspable_attempts") if measured else "—",
+            ]
+        rows.append(
+            [
+                str(r["method"]),
+                _pct(r["gsr_percent"]),
+                _interval(r) if measured else "—",
+                f"{int(r['successes'])}/{int(r['attempts'])}" if measured else "—",
+                *extra,
+                str(int(r["errors"])) if measured else "—",
+                str(r["source"]),
+            ]
+        )
+    heads = ["method", "GSR", f"{conf} CI", "k/n"]
+    if graspability:
+        heads += ["GSR graspable", f"{conf} CI", "k/n graspable"]
+    out += [_md([*heads, "errors", "source"], rows), ""]
+
+    if not t1o.empty:
+        out += ["### Isolated GSR per object (successes/attempts, %)", ""]
+        planners = [p for p in data.planners if p in set(t1o["planner"])]
+        rows = []
+        for obj in data.objects:
+            sub = t1o[t1o["object"] == obj].set_index("planner")
+            cells = [obj]
+            if graspability:  # the same poses for every planner: take the first one's count
+                first = sub.iloc[0]
+                cells.append(f"{int(first['graspable_attempts'])}/{int(first['attempts'])}")
+            for p in planners:
+                if p in sub.index:
+                    r = sub.loc[p]
+                    cells.append(
+                        f"{int(r['successes'])}/{int(r['attempts'])} ({r['gsr_percent']:.0f})"
+                    )
+                else:
+                    cells.append("—")
+            rows.append(cells)
+        heads = ["object", *(["graspable"] if graspability else []), *planners]
+        out += [_md(heads, rows), ""]
+
+    out += ["## Table II: packed scenes, GSR and CR (%)", ""]
+    rows = []
+    for _, r in t2.iterrows():
+        measured = r["source"] == data.measured
+        extra = []
+        if graspability:
+            extra = [
+                _pct(r["graspable_gsr_percent"]) if measured else "—",
+                _interval(r, "graspable_gsr_") if measured else "—",
+                _pct(r["graspable_cr_percent"]) if measured else "—",
+                _interval(r, "graspable_cr_") if measured else "—",
+            ]
+        rows.append(
+            [
+                str(r["method"]),
+                _pct(r["gsr_percent"]),
+                _interval(r, "gsr_") if measured else "—",
+                _pct(r["cr_percent"]),
+                _interval(r, "cr_") if measured else "—",
+                *extra,
+                f"{int(r['rounds'])}" if measured else "—",
+                str(int(r["errors"])) if measured else "—",
+                str(r["source"]),
+            ]
+        )
+    headers = ["method", "GSR", f"GSR {conf} CI", "CR", f"CR {conf} CI"]
+    if graspability:
+        headers += ["GSR graspable", f"{conf} CI", "CR graspable", f"{conf} CI"]
+    headers += ["rounds", "errors"]
+    out += [_md([*headers, "source"], rows), ""]
+
+    if not outcomes.empty:
+        out += ["## Outcomes per planner (attempt counts; `error` = trials that could not run)", ""]
+        cols = [c for c in OUTCOME_COLUMNS if outcomes[c].sum() > 0 or c == "success"]
+        rows = [
+            [r["experiment"], r["planner"], *[str(int(r[c])) for c in cols]]
+            for _, r in outcomes.iterrows()
+        ]
+        out += [_md(["experiment", "planner", *cols], rows), ""]
+
+    if not times.empty:
+        out += ["## Planning time per attempt (s)", ""]
+        rows = [
+            [
+                r["experiment"],
+                r["planner"],
+                str(int(r["n"])),
+                f"{r['median_s']:.3f}",
+                f"{r['p90_s']:.3f}",
+                f"{r['max_s']:.3f}",
+            ]
+            for _, r in times.iterrows()
+        ]
+        out += [_md(["experiment", "planner", "n", "median", "p90", "max"], rows), ""]
+
+    out += [
+        "## Notes",
+        "",
+        "- GSR = successful attempts / attempts (an attempt where no grasp was found counts as "
+        "a failed attempt); CR = objects removed / objects presented, summed over rounds.",
+        "- The CR interval treats the objects of a round as independent; it is optimistic.",
+        *(
+            [
+                "- Graspable: the oracle (privileged) found a feasible grasp on the true meshes "
+                "of that presentation; CR graspable counts the objects graspable in the settled "
+                "scene before the first attempt.",
+                f"- Rows marked (privileged): {PRIVILEGED_NOTE}.",
+            ]
+            if graspability
+            else []
+        ),
+        f'- "{PROVENANCE}": {CITATION}; the baselines\' numbers come from other robots and '
+        "setups, quoted by the paper. They are context, not a like-for-like comparison.",
+        f'- "{data.measured}": this run'
+        + (", MuJoCo simulation." if data.measured == MEASURED else ", NOT a simulation."),
+        "",
+    ]
+    return "\n".join(out)

@@ -1,0 +1,58 @@
+"""Protocol configs: object lists, ``all`` with ``exclude``, and the objects a run needs."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from hsqbench.config import ConfigError
+from hsqbench.experiment.config import (
+    YCB_OBJECTS,
+    ExperimentConfig,
+    IsolatedConfig,
+    PackedConfig,
+    load_experiment_config,
+)
+
+YCB = os.environ.get("HSQ_YCB_DIR")
+needs_ycb = pytest.mark.skipif(not YCB or not Path(YCB).is_dir(), reason="HSQ_YCB_DIR is not set")
+
+
+def test_object_names_are_the_union_of_enabled_experiments_in_first_use_order():
+    cfg = ExperimentConfig(
+        isolated=IsolatedConfig(objects=("a", "b")),
+        packed=PackedConfig(objects=("b", "c", "d"), objects_per_round=2),
+    )
+    assert cfg.object_names() == ("a", "b", "c", "d")
+    off = ExperimentConfig(
+        isolated=IsolatedConfig(objects=("a",), enabled=False),
+        packed=PackedConfig(objects=("c", "d"), objects_per_round=2),
+    )
+    assert off.object_names() == ("c", "d")
+
+
+def test_exclude_takes_names_out_and_rejects_unknown_ones():
+    assert IsolatedConfig(objects=("a", "b", "c"), exclude=("b",)).objects == ("a", "c")
+    with pytest.raises(ConfigError, match=r"exclude names \['z'\]"):
+        IsolatedConfig(objects=("a", "b"), exclude=("z",))
+    with pytest.raises(ConfigError, match="a list of names or 'all'"):
+        IsolatedConfig(objects="everything")
+
+
+@needs_ycb
+def test_all_is_every_ycb_object_of_the_folder_less_the_excluded():
+    from hsqbench.assets.library import ycb_names
+
+    cfg = IsolatedConfig(objects="all", exclude=YCB_OBJECTS)
+    assert cfg.objects == tuple(n for n in ycb_names() if n not in YCB_OBJECTS)
+    assert len(cfg.objects) == len(ycb_names()) - len(YCB_OBJECTS)
+
+
+@needs_ycb
+def test_the_unseen_object_protocol_holds_no_paper_object():
+    cfg = load_experiment_config("ycb")
+    for exp in cfg.enabled_experiments():
+        assert not set(getattr(cfg, exp).objects) & set(YCB_OBJECTS)
+    assert "oracle" in cfg.planners
