@@ -23,7 +23,7 @@ from hsqbench.planner.recovery import (
 )
 from hsqbench.planner.registry import get_planner, planner_names
 from hsqbench.planner.synthesis import synthesize
-from hsqbench.planner.table_lines import LEVELLED
+from hsqbench.planner.table_lines import LEVELLED, PINCHED, level_table_lines
 from hsqbench.superquadric import Superquadric
 from tests.shapes import (
     Box,
@@ -118,6 +118,13 @@ def case_table_lines(cfg: PlannerConfig):
     return int(np.count_nonzero(res.candidates.lines.family == LEVELLED))
 
 
+def case_pinch(cfg: PlannerConfig):
+    bar = lying_bar(0.005, 0.005, eps2=0.1)  # a 10 mm square bar lying on the table
+    cands = synthesize([bar], cfg.grasp)
+    level_table_lines(cands, [bar], TABLE, GRIPPER, cfg.grasp)
+    return int(np.count_nonzero(cands.lines.family == PINCHED))
+
+
 def case_duplicate_lines(cfg: PlannerConfig):
     base = one_line(0.02).lines
     near = one_line(0.021, centre=(0.001, -0.001, 0.0), direction=(-1.0, 0.02, 0.0)).lines
@@ -164,6 +171,7 @@ CASES = {
     "slide_all_shapes": (case_slide_all_shapes, lambda on, off: on > 0 == off),
     "antipodal_check": (case_antipodal_check, lambda on, off: on < off),
     "table_lines": (case_table_lines, lambda on, off: on > 0 == off),
+    "pinch": (case_pinch, lambda on, off: on > 0 == off),
     "duplicate_lines": (case_duplicate_lines, lambda on, off: on > 0 == off),
     "opening_margin": (case_opening_margin, lambda on, off: on == {"width"} and "width" not in off),
     "support_fraction": (case_support_fraction, lambda on, off: on > off == 5),

@@ -85,6 +85,11 @@ ADDITIONS: dict[str, Addition] = {
         {"level_table_lines": False},
         "lines the table blocks are levelled and lifted, so objects lying flat get grasps",
     ),
+    "pinch": Addition(
+        "grasp",
+        {"pinch_max_lift_m": 0.0},
+        "a part too thin for a lifted line is pinched with the pads' lower ends",
+    ),
     "duplicate_lines": Addition(
         "grasp",
         {"duplicate_distance_m": 1e-9, "duplicate_angle_deg": 1e-9},
@@ -133,6 +138,7 @@ class AdditionsConfig:
     slide_all_shapes: bool = True
     antipodal_check: bool = True
     table_lines: bool = True
+    pinch: bool = True
     duplicate_lines: bool = True
     opening_margin: bool = True
     support_fraction: bool = True

@@ -114,6 +114,7 @@ class GraspConfig:
     min_part_scale_m: float = 0.0025
     level_table_lines: bool = True
     level_max_angle_deg: float = 45.0
+    pinch_max_lift_m: float = 0.008
     # Elimination (sweep_rule: set by additions.sweep).
     sweep_rule: bool = True
     duplicate_distance_m: float = 0.003
@@ -167,6 +168,7 @@ class GraspConfig:
             "max_tilt_deg": self.max_tilt_deg,
             "min_part_scale_m": self.min_part_scale_m,
             "level_max_angle_deg": self.level_max_angle_deg,
+            "pinch_max_lift_m": self.pinch_max_lift_m,
             "opening_margin_m": self.opening_margin_m,
             "support_min_points": self.support_min_points,
             "support_min_fraction": self.support_min_fraction,
