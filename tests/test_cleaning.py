@@ -68,6 +68,18 @@ def test_clean_cloud_maps_every_input_point_to_its_centroid_or_to_removed():
     )
 
 
+def test_a_cloud_already_at_the_voxel_density_is_left_as_given():
+    grid = np.stack(np.meshgrid(*[np.arange(20) * 0.002] * 2, [0.0]), axis=-1).reshape(-1, 3)
+    # Voxels are anchored at the cloud's minimum corner, the origin here: each grid point sits at
+    # a voxel's centre, one per voxel but the first (its voxel also holds the origin).
+    grid = np.concatenate([[[0.0, 0.0, 0.0]], grid + 0.001])
+    cleaned = clean_cloud(grid, CONFIG)
+    np.testing.assert_array_equal(cleaned.points, grid)
+    # Two points per voxel: half merge, so the cloud is thinned.
+    doubled = np.concatenate([grid, grid + 0.0002])
+    assert len(clean_cloud(doubled, CONFIG).points) <= len(grid)
+
+
 def test_voxel_zero_keeps_the_points_as_given():
     rng = np.random.default_rng(1)
     surface, _, _ = body_and_thin_bar(rng)
@@ -105,6 +117,7 @@ def test_zero_neighbours_turns_cleaning_off():
         ({"min_neighbours": -1}, "min_neighbours"),
         ({"voxel_m": -0.001}, "voxel_m"),
         ({"max_points": 0}, "max_points"),
+        ({"min_merged_fraction": 1.5}, "min_merged_fraction"),
     ],
 )
 def test_bad_config_is_named(kwargs, name):

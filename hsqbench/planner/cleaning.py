@@ -43,6 +43,8 @@ class CleaningConfig:
         voxel_m: the cloud is replaced by the centroids of voxels of this size first, metres;
             0 leaves it as given.
         max_points: at most this many centroids: the voxel grows until they fit.
+        min_merged_fraction: a cloud within ``max_points`` whose voxels merge fewer than this
+            share of its points is already at that density and is left exactly as given.
         radius_m: neighbourhood radius, metres.
         min_neighbours: points needed within ``radius_m`` (the point itself not counted) for a
             point to stay; 0 turns cleaning off.
@@ -50,12 +52,17 @@ class CleaningConfig:
 
     voxel_m: float = 0.002
     max_points: int = 30000
+    min_merged_fraction: float = 0.1
     radius_m: float = 0.008
     min_neighbours: int = 5
 
     def __post_init__(self) -> None:
         if not self.voxel_m >= 0:
             raise ValueError(f"cleaning.voxel_m must be >= 0 metres (0: off), got {self.voxel_m}")
+        if not 0.0 <= self.min_merged_fraction <= 1.0:
+            raise ValueError(
+                f"cleaning.min_merged_fraction must lie in [0, 1], got {self.min_merged_fraction}"
+            )
         if self.max_points < 1:
             raise ValueError(f"cleaning.max_points must be >= 1, got {self.max_points}")
         if not self.radius_m > 0:
@@ -99,14 +106,16 @@ class CleanedCloud:
 
 
 def clean_cloud(points: NDArray[np.float64], config: CleaningConfig) -> CleanedCloud:
-    """Voxel centroids of ``points`` (``voxel_m``, grown to fit ``max_points``) without the
-    isolated ones."""
+    """Voxel centroids of ``points`` (``voxel_m``, grown to fit ``max_points``; the points
+    themselves where that merges less than ``min_merged_fraction`` of them) without the isolated
+    ones."""
     n = points.shape[0]
+    thinned, inverse = points, np.arange(n, dtype=np.int64)
     if config.voxel_m > 0 and n > 0:
         down = downsample_to_budget(points, config.voxel_m, config.max_points)
-        thinned, inverse = down.points, down.inverse
-    else:
-        thinned, inverse = points, np.arange(n, dtype=np.int64)
+        merged = 1.0 - len(down.points) / n
+        if n > config.max_points or merged >= config.min_merged_fraction:
+            thinned, inverse = down.points, down.inverse
     keep = ~isolated_mask(thinned, config)
     row = np.full(thinned.shape[0], -1, dtype=np.int64)
     row[keep] = np.arange(int(np.count_nonzero(keep)))
