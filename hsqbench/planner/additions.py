@@ -33,7 +33,7 @@ ADDITIONS: dict[str, Addition] = {
     "thinning": Addition(
         "cleaning",
         {"voxel_m": 0.0},
-        "the cloud is thinned to 2 mm voxel centroids first, so the cost stops growing with density",
+        "a cloud denser than 2 mm is thinned to 2 mm voxel centroids, so the cost stops growing",
     ),
     "outlier_removal": Addition(
         "cleaning",

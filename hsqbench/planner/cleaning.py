@@ -5,7 +5,8 @@ Thinning first (ours): the neighbour count below costs the number of points time
 per neighbourhood, i.e. grows with the square of the density; a raw sensor cloud of 320 000
 points took 12 s to clean. Voxel centroids at ``voxel_m`` (the 2 mm footprint of the paper's and
 our cameras' pixels) bound the density, so the cost beyond it follows the surface area, and every
-later stage sees a cloud of the density it was tuned on.
+later stage sees a cloud of the density it was tuned on. A cloud already at that density (its
+voxels would merge less than ``min_merged_fraction`` of its points) is left exactly as given.
 
 Not in the paper, which relies on its outlier model ("the probabilistic model can rule noisy
 points as outliers"). That model serves stage one, but stage two counts raw points: one stray

@@ -109,7 +109,7 @@ class GraspConfig:
     flat_eps_max: float = 0.5
     round_eps2_tol: float = 0.25
     round_axis_ratio_tol: float = 0.1
-    max_tilt_deg: float = 15.0
+    max_tilt_deg: float = 26.6
     slide_all_shapes: bool = True
     min_part_scale_m: float = 0.0025
     level_table_lines: bool = True
