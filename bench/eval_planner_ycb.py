@@ -3,7 +3,8 @@
 For each object and seed: the isolated scene of that seed (``build_scene("isolated", [name],
 seed)``), one observation by the scene's two depth cameras with the configured sensor model
 (``configs/perception.yaml``; ``--sensor`` overrides it), then ``plan_grasps`` with the table
-plane and the seed. Printed per object and seed: the cloud size, the number of grasps, the top
+plane, the camera centres and the seed (``--planner``: any registered planner, e.g. an
+ablation ``hsq-no-sweep`` or the antipodal baseline). Printed per object and seed: the cloud size, the number of grasps, the top
 score and width, the planner's CPU time, and either the top grasp's ground-truth check or the
 reason for no grasp (``-v``: the candidates left after each rule).
 
@@ -20,6 +21,12 @@ configs and the object, seed and sensor model, so planner changes are re-measure
 BLAS and K-means run on one thread (the planner's timing target is for one core).
 
     .venv/bin/python bench/eval_planner_ycb.py [--seeds 0 1 2] [--objects mug banana] [-v]
+    .venv/bin/python bench/eval_planner_ycb.py --objects all --per-object  # the 54 of HSQ_YCB_DIR
+
+``--objects`` takes names, or ``paper`` (the paper's 15, configs/assets.yaml download.objects,
+the default), ``unseen`` (every other object of objects.csv) or ``all``. ``--per-object`` ends
+with one line per object (top grasps ok over its seeds, runs with grasps, failure names) and
+the totals over the paper's 15 and the others; ``--json PATH`` writes every run.
 """
 
 from __future__ import annotations
@@ -44,9 +51,9 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hsqbench.config import to_dict  # noqa: E402
-from hsqbench.planner import plan_grasps  # noqa: E402
-from hsqbench.planner.api import resolve_config, resolve_gripper  # noqa: E402
+from hsqbench.planner.api import PlanningContext, resolve_config, resolve_gripper  # noqa: E402
 from hsqbench.planner.gripper import GripperModel  # noqa: E402
+from hsqbench.planner.registry import get_planner  # noqa: E402
 from hsqbench.settings import cache_dir  # noqa: E402
 
 #: Spacing of the ground-truth mesh samples, metres (the fused cloud's 2 mm voxel).
@@ -168,36 +175,80 @@ def check_grasp(grasp, truth: np.ndarray, plane: np.ndarray, gripper: GripperMod
     return "ok" if not fails else "+".join(fails)
 
 
-def main() -> int:
+def object_names(choice: list[str] | None) -> list[str]:
+    """Names for ``--objects``: ``paper``, ``unseen``, ``all`` or the names themselves."""
+    from hsqbench.assets.config import load_assets_config
     from hsqbench.assets.library import ycb_names
 
+    paper = [o.name for o in load_assets_config().download.objects]
+    if not choice or choice == ["paper"]:
+        return paper
+    if choice == ["all"]:
+        return ycb_names()
+    if choice == ["unseen"]:
+        return [n for n in ycb_names() if n not in paper]
+    return choice
+
+
+def per_object_report(rows: list[tuple], names: list[str]) -> None:
+    """One line per object, then the totals over the paper's 15 and the others."""
+    from hsqbench.assets.config import load_assets_config
+
+    paper = {o.name for o in load_assets_config().download.objects}
+    totals: dict[str, list[int]] = {"paper": [0, 0, 0], "others": [0, 0, 0]}
+    for name in names:
+        mine = [r for r in rows if r[0] == name]
+        ok = sum(r[4] == "ok" for r in mine)
+        with_grasps = sum(r[2] > 0 for r in mine)
+        fails = ",".join(sorted({r[4] for r in mine if r[4] != "ok"}))
+        print(f"OBJECT {name:22s} ok {ok}/{len(mine)} grasps {with_grasps}/{len(mine)} {fails}")
+        group = totals["paper" if name in paper else "others"]
+        group[0] += ok
+        group[1] += with_grasps
+        group[2] += len(mine)
+    for group, (ok, with_grasps, n) in totals.items():
+        if n:
+            print(
+                f"TOTAL {group:7s} top grasp ok {ok}/{n} ({100 * ok / n:.1f} %), runs with "
+                f"grasps {with_grasps}/{n}"
+            )
+
+
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--objects", nargs="*", default=None, help="default: the 15 YCB objects")
+    parser.add_argument(
+        "--objects", nargs="*", default=None, help="names, or paper (default), unseen, all"
+    )
     parser.add_argument("--seeds", nargs="*", type=int, default=[0, 1, 2])
     parser.add_argument("--sensor", default=None, help="override perception.yaml sensor_model")
     parser.add_argument("--config", default=None, help="planner config name or path")
+    parser.add_argument(
+        "--planner",
+        default="hsq",
+        help="a registered planner: hsq, hsq-paper, hsq-no-<addition>, antipodal, single-sq",
+    )
     parser.add_argument("--scene", default=None, help="scene config name or path (cameras)")
     parser.add_argument("--refresh", action="store_true", help="re-render cached clouds")
     parser.add_argument("-v", "--verbose", action="store_true", help="candidates after each rule")
+    parser.add_argument("--per-object", action="store_true", help="a summary line per object")
+    parser.add_argument("--json", default=None, help="write every run to this JSON file")
     args = parser.parse_args()
 
-    names = args.objects or ycb_names()
+    names = object_names(args.objects)
     gripper = resolve_gripper(resolve_config(args.config).grasp.gripper)
+    planner = get_planner(args.planner, args.config)
     rows = []
     for name in names:
         for seed in args.seeds:
             obs = observe(name, seed, args.sensor, args.refresh, args.scene)
             plane = obs["support_plane"]
-            if not rows:  # warm-up: imports and config parsing stay out of the first time
-                plan_grasps(obs["points"][:500], args.config, support_plane=plane, seed=seed)
-            start = time.process_time()
-            res = plan_grasps(
-                obs["points"],
-                args.config,
-                support_plane=plane,
-                seed=seed,
-                camera_positions=obs["camera_positions"],
+            context = PlanningContext(
+                support_plane=tuple(plane), seed=seed, camera_positions=obs["camera_positions"]
             )
+            if not rows:  # warm-up: imports and config parsing stay out of the first time
+                planner.plan(obs["points"][:500], PlanningContext(support_plane=tuple(plane)))
+            start = time.process_time()
+            res = planner.plan(obs["points"], context)
             cpu = time.process_time() - start
             best = res.best
             if best is not None:
@@ -218,6 +269,15 @@ def main() -> int:
             if args.verbose:
                 print(f"{'':26s}remaining={res.remaining}", flush=True)
             rows.append((name, seed, len(res.grasps), cpu, check))
+
+    if args.per_object:
+        per_object_report(rows, names)
+    if args.json:
+        keys = ("object", "seed", "n_grasps", "cpu_s", "check")
+        out = Path(args.json)
+        tmp = out.with_suffix(out.suffix + ".tmp")
+        tmp.write_text(json.dumps([dict(zip(keys, r, strict=True)) for r in rows], indent=1))
+        tmp.replace(out)
 
     objects_with = {n for n, _, k, _, _ in rows if k > 0}
     runs_with = sum(k > 0 for _, _, k, _, _ in rows)

@@ -51,14 +51,57 @@ def test_flying_pixels_go_and_a_thin_bar_stays():
     assert np.mean(drop[: len(surface)]) < 0.005
 
 
-def test_clean_cloud_returns_kept_indices():
+def test_clean_cloud_maps_every_input_point_to_its_centroid_or_to_removed():
     rng = np.random.default_rng(1)
     surface, _, _ = body_and_thin_bar(rng)
     points = np.concatenate([surface[:100], [[1.0, 1.0, 1.0]], surface[100:]])
-    cleaned, kept = clean_cloud(points, CONFIG)
-    assert 100 not in kept
-    np.testing.assert_array_equal(cleaned, points[kept])
-    assert len(kept) == len(points) - 1
+    cleaned = clean_cloud(points, CONFIG)
+    assert cleaned.source[100] == -1 and cleaned.n_removed == 1
+    kept = cleaned.source >= 0
+    # Each kept point lies in the 2 mm voxel of its centroid (within the voxel's diagonal).
+    gap = np.linalg.norm(points[kept] - cleaned.points[cleaned.source[kept]], axis=1)
+    assert gap.max() <= np.sqrt(3) * CONFIG.voxel_m
+    assert set(cleaned.source[kept]) == set(range(len(cleaned.points)))
+    rows = np.array([0, 5])
+    np.testing.assert_array_equal(
+        cleaned.input_indices(rows), np.flatnonzero(np.isin(cleaned.source, rows))
+    )
+
+
+def test_a_cloud_already_at_the_voxel_density_is_left_as_given():
+    grid = np.stack(np.meshgrid(*[np.arange(20) * 0.002] * 2, [0.0]), axis=-1).reshape(-1, 3)
+    # Voxels are anchored at the cloud's minimum corner, the origin here: each grid point sits at
+    # a voxel's centre, one per voxel but the first (its voxel also holds the origin).
+    grid = np.concatenate([[[0.0, 0.0, 0.0]], grid + 0.001])
+    cleaned = clean_cloud(grid, CONFIG)
+    np.testing.assert_array_equal(cleaned.points, grid)
+    # Two points per voxel: half merge, so the cloud is thinned.
+    doubled = np.concatenate([grid, grid + 0.0002])
+    assert len(clean_cloud(doubled, CONFIG).points) <= len(grid)
+
+
+def test_voxel_zero_keeps_the_points_as_given():
+    rng = np.random.default_rng(1)
+    surface, _, _ = body_and_thin_bar(rng)
+    cleaned = clean_cloud(surface, CleaningConfig(voxel_m=0.0))
+    np.testing.assert_array_equal(cleaned.points, surface[cleaned.source >= 0])
+
+
+def test_a_dense_cloud_is_thinned_to_the_density_and_budget():
+    rng = np.random.default_rng(4)
+    body = Cylinder(0.035, 0.05, center=np.array([0.5, 0.0, 0.05]))
+    sparse = union_cloud((body,), 0.002, rng).points
+    dense = union_cloud((body,), 0.0005, rng).points  # 16 x the points
+    n_sparse = len(clean_cloud(sparse, CONFIG).points)
+    n_dense = len(clean_cloud(dense, CONFIG).points)
+    # 16 x the points at 2 mm spacing, 2 x at most after thinning (a surface crosses ~1.5 voxels
+    # of its spacing's size per sample).
+    assert len(dense) > 12 * len(sparse) and n_dense < 2 * len(sparse)
+    # Noise makes the dense shell several voxels thick; the budget still bounds it.
+    noisy = dense + rng.normal(scale=0.001, size=dense.shape)
+    assert len(clean_cloud(noisy, CONFIG).points) > 2 * n_sparse
+    capped = clean_cloud(noisy, CleaningConfig(max_points=n_sparse))
+    assert 0.5 * n_sparse < len(capped.points) <= n_sparse
 
 
 def test_zero_neighbours_turns_cleaning_off():
@@ -69,7 +112,13 @@ def test_zero_neighbours_turns_cleaning_off():
 
 @pytest.mark.parametrize(
     ("kwargs", "name"),
-    [({"radius_m": 0.0}, "radius_m"), ({"min_neighbours": -1}, "min_neighbours")],
+    [
+        ({"radius_m": 0.0}, "radius_m"),
+        ({"min_neighbours": -1}, "min_neighbours"),
+        ({"voxel_m": -0.001}, "voxel_m"),
+        ({"max_points": 0}, "max_points"),
+        ({"min_merged_fraction": 1.5}, "min_merged_fraction"),
+    ],
 )
 def test_bad_config_is_named(kwargs, name):
     with pytest.raises(ValueError, match=name):

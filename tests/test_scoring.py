@@ -41,11 +41,16 @@ def test_alpha_and_beta_factors() -> None:
 
 
 def test_curvature_is_dimensionless_k_times_h_squared() -> None:
-    # A sphere has K h^2 = 1 at any size: h_gamma = exp(-1 / q_gamma).
+    # A sphere's lines through its centre have K h^2 = 1 at any size: h_gamma =
+    # exp(-1 / q_gamma); slid chords (h < r) have K h^2 = (h / r)^2.
     for r in (0.01, 0.035):
         cands = scored([Superquadric(1.0, 1.0, [r, r, r])])
-        np.testing.assert_allclose(cands.measures["gamma"], 1.0, rtol=1e-3)
-        np.testing.assert_allclose(cands.factors["h_gamma"], np.exp(-1 / CONFIG.q_gamma), rtol=1e-3)
+        axis = np.repeat(cands.lines.family == "axis", 36)
+        np.testing.assert_allclose(cands.measures["gamma"][axis], 1.0, rtol=1e-3)
+        expected = np.exp(-1 / CONFIG.q_gamma)
+        np.testing.assert_allclose(cands.factors["h_gamma"][axis], expected, rtol=1e-3)
+        chords = np.repeat((cands.lines.half_lengths / r) ** 2, 36)
+        np.testing.assert_allclose(cands.measures["gamma"], chords, rtol=1e-2)
     # Flat faces of a box and the side of a cylinder: K = 0, h_gamma = 1.
     box = scored([Superquadric(0.1, 0.1, [0.03, 0.02, 0.05])])
     central = np.repeat(box.lines.family == "axis", 36)

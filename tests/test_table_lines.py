@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.elimination import approach_openings, line_boxes, table_clear
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.synthesis import synthesize
-from hsqbench.planner.table_lines import LEVELLED, level_table_lines
+from hsqbench.planner.table_lines import LEVELLED, PINCHED, level_table_lines
 from hsqbench.superquadric import Superquadric
 
 TABLE = np.array([0.0, 0.0, 1.0, 0.0])
@@ -75,13 +76,29 @@ def test_a_low_line_is_lifted_just_enough():
     assert np.all(clear_rolls(cands, idx)[:, 0])
 
 
-def test_a_lift_onto_a_steep_round_side_is_refused():
+def test_a_lift_onto_a_steep_round_side_is_refused_and_pinched_instead():
     # Round bar of radius 8 mm: lifting by ~4 mm puts the contacts where the normal tilts ~30 deg.
     sq = lying_bar(0.008, 0.008)
-    cands, idx, (centres, _) = repaired(sq)
-    assert idx.size == 0
+    no_pinch = GraspConfig(pinch_max_lift_m=0.0)
+    cands = synthesize([sq], no_pinch)
+    centres = cands.lines.centres.copy()
+    idx = level_table_lines(cands, [sq], TABLE, GRIPPER, no_pinch)
     across = np.abs(cands.lines.directions[:, 1]) < 0.5
+    assert not np.any(across[idx])
     np.testing.assert_array_equal(cands.lines.centres[across], centres[across])
+    # With the pinch, the contacts stay at the bar's equator and only the hand is lifted.
+    cands, idx, (centres, _) = repaired(sq)
+    L = cands.lines
+    assert idx.size >= 1 and np.all(L.family[idx] == PINCHED)
+    need = GRIPPER.fingertip_overhang_m + CONFIG.table_clearance_m
+    np.testing.assert_allclose(L.centres[idx, 2], need, atol=1e-4)
+    # Chords of the round cross-section at the lines' own heights; the equator's is the radius.
+    assert np.all(L.half_lengths[idx] <= 0.008 + 1e-9)
+    assert np.max(L.half_lengths[idx]) == pytest.approx(0.008, abs=1e-6)
+    assert np.all(clear_rolls(cands, idx)[:, 0])
+    # A bar too thin for the pads to reach (lift beyond pinch_max_lift_m) gets nothing.
+    _, thin, _ = repaired(lying_bar(0.003, 0.003))
+    assert thin.size == 0
 
 
 def test_lines_the_table_does_not_block_are_untouched():

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.config import resolve_config_path
+from hsqbench.planner.additions import AdditionsConfig
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet
 from hsqbench.planner.cleaning import all_removed_reason, clean_cloud
 from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_config
@@ -322,9 +323,10 @@ def plan_grasps(
 ) -> PlanResult:
     """The paper's planner: hidden superquadrics (stage one), then ranked grasps (stage two).
 
-    Before both stages, isolated points (flying pixels) are removed (``cleaning:`` in the config,
-    :mod:`hsqbench.planner.cleaning`; our addition): stage two then checks collisions against the
-    cleaned cloud. ``hidden_superquadrics[i].inliers`` index ``points`` as given.
+    Before both stages the cloud is thinned to 2 mm voxel centroids and isolated points (flying
+    pixels) are removed (``cleaning:`` in the config, :mod:`hsqbench.planner.cleaning`; our
+    addition): stage two then checks collisions against the cleaned cloud.
+    ``hidden_superquadrics[i].inliers`` index ``points`` as given.
 
     Args:
         points: (N, 3) cloud of the object (or packed scene), world metres, table removed.
@@ -344,7 +346,8 @@ def plan_grasps(
     start = time.perf_counter()
     raw = validate_cloud(points)
     cfg = resolve_config(config)
-    cloud, kept = clean_cloud(raw, cfg.cleaning)
+    cleaned = clean_cloud(raw, cfg.cleaning)
+    cloud = cleaned.points
     t_cleaning = time.perf_counter() - start
     if cloud.shape[0] == 0:
         return PlanResult(
@@ -356,7 +359,7 @@ def plan_grasps(
     start_recovery = time.perf_counter()
     hidden = recover_hidden_superquadrics(cloud, cfg.recovery, seed=seed)
     # Inliers index the caller's cloud, not the cleaned one.
-    hidden = [dataclasses.replace(h, inliers=kept[h.inliers]) for h in hidden]
+    hidden = [dataclasses.replace(h, inliers=cleaned.input_indices(h.inliers)) for h in hidden]
     t_recovery = time.perf_counter() - start_recovery
     result = plan_from_hidden(
         cloud,
@@ -368,14 +371,18 @@ def plan_grasps(
         seed=seed,
         camera_positions=camera_positions,
     )
-    result.n_removed = raw.shape[0] - cloud.shape[0]
+    result.n_removed = cleaned.n_removed
     result.timings = {"cleaning": t_cleaning, "recovery": t_recovery, **result.timings}
     result.timings["total"] = time.perf_counter() - start
     return result
 
 
 class HSQPlanner:
-    """The paper's planner behind the :class:`Planner` protocol."""
+    """The paper's planner behind the :class:`Planner` protocol.
+
+    ``additions_off``: names of additions (:mod:`hsqbench.planner.additions`) to switch off on
+    top of the config's own switches; ``name`` labels the results (e.g. ``hsq-paper``).
+    """
 
     name = "hsq"
 
@@ -383,11 +390,29 @@ class HSQPlanner:
         self,
         config: PlannerConfig | str | Path | None = None,
         gripper: GripperModel | None = None,
+        *,
+        additions_off: Sequence[str] = (),
+        name: str = "hsq",
     ) -> None:
-        self.config = resolve_config(config)
+        cfg = resolve_config(config)
+        if additions_off:
+            unknown = sorted(set(additions_off) - set(AdditionsConfig.names()))
+            if unknown:
+                raise ValueError(
+                    f"unknown addition(s) {unknown}; known: {', '.join(AdditionsConfig.names())}"
+                )
+            switches = {
+                n: getattr(cfg.additions, n) and n not in additions_off
+                for n in AdditionsConfig.names()
+            }
+            cfg = cfg.with_additions(AdditionsConfig(**switches))
+        self.config = cfg
+        self.name = name
         self.gripper = (
             gripper if gripper is not None else resolve_gripper(self.config.grasp.gripper)
         )
 
     def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
-        return plan_grasps(points, self.config, gripper=self.gripper, **context.plan_kwargs())
+        result = plan_grasps(points, self.config, gripper=self.gripper, **context.plan_kwargs())
+        result.planner = self.name
+        return result

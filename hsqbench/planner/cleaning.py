@@ -1,4 +1,12 @@
-"""Cloud cleaning before planning: isolated points (flying pixels) out.
+"""Cloud cleaning before planning: the cloud thinned to a fixed voxel size, then isolated
+points (flying pixels) out.
+
+Thinning first (ours): the neighbour count below costs the number of points times the points
+per neighbourhood, i.e. grows with the square of the density; a raw sensor cloud of 320 000
+points took 12 s to clean. Voxel centroids at ``voxel_m`` (the 2 mm footprint of the paper's and
+our cameras' pixels) bound the density, so the cost beyond it follows the surface area, and every
+later stage sees a cloud of the density it was tuned on. A cloud already at that density (its
+voxels would merge less than ``min_merged_fraction`` of its points) is left exactly as given.
 
 Not in the paper, which relies on its outlier model ("the probabilistic model can rule noisy
 points as outliers"). That model serves stage one, but stage two counts raw points: one stray
@@ -25,21 +33,39 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from hsqbench.planner.downsample import downsample_to_budget
+
 
 @dataclass(frozen=True)
 class CleaningConfig:
     """Radius outlier removal (``cleaning:`` in ``configs/planner.yaml``).
 
     Attributes:
+        voxel_m: the cloud is replaced by the centroids of voxels of this size first, metres;
+            0 leaves it as given.
+        max_points: at most this many centroids: the voxel grows until they fit.
+        min_merged_fraction: a cloud within ``max_points`` whose voxels merge fewer than this
+            share of its points is already at that density and is left exactly as given.
         radius_m: neighbourhood radius, metres.
         min_neighbours: points needed within ``radius_m`` (the point itself not counted) for a
             point to stay; 0 turns cleaning off.
     """
 
+    voxel_m: float = 0.002
+    max_points: int = 30000
+    min_merged_fraction: float = 0.1
     radius_m: float = 0.008
     min_neighbours: int = 5
 
     def __post_init__(self) -> None:
+        if not self.voxel_m >= 0:
+            raise ValueError(f"cleaning.voxel_m must be >= 0 metres (0: off), got {self.voxel_m}")
+        if not 0.0 <= self.min_merged_fraction <= 1.0:
+            raise ValueError(
+                f"cleaning.min_merged_fraction must lie in [0, 1], got {self.min_merged_fraction}"
+            )
+        if self.max_points < 1:
+            raise ValueError(f"cleaning.max_points must be >= 1, got {self.max_points}")
         if not self.radius_m > 0:
             raise ValueError(f"cleaning.radius_m must be > 0 metres, got {self.radius_m}")
         if self.min_neighbours < 0:
@@ -55,12 +81,46 @@ def isolated_mask(points: NDArray[np.float64], config: CleaningConfig) -> NDArra
     return counts - 1 < config.min_neighbours
 
 
-def clean_cloud(
-    points: NDArray[np.float64], config: CleaningConfig
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """The cloud without its isolated points, and the indices (into ``points``) of those kept."""
-    keep = np.flatnonzero(~isolated_mask(points, config))
-    return points[keep], keep
+@dataclass(frozen=True)
+class CleanedCloud:
+    """The cloud the planner works on, and where each input point went.
+
+    Attributes:
+        points: (M, 3) the voxel centroids (or input points, ``voxel_m`` 0) that were kept.
+        source: (N,) for each input point, the row of ``points`` it was merged into, or -1 when
+            its voxel was removed as isolated.
+    """
+
+    points: NDArray[np.float64]
+    source: NDArray[np.int64]
+
+    @property
+    def n_removed(self) -> int:
+        """Input points discarded (merged points are not discarded)."""
+        return int(np.count_nonzero(self.source < 0))
+
+    def input_indices(self, rows: NDArray[np.int64]) -> NDArray[np.int64]:
+        """Indices of the input points merged into ``rows`` of ``points`` (e.g. inliers)."""
+        hit = np.zeros(self.points.shape[0] + 1, dtype=bool)
+        hit[np.asarray(rows, dtype=np.int64)] = True
+        return np.flatnonzero(hit[self.source])
+
+
+def clean_cloud(points: NDArray[np.float64], config: CleaningConfig) -> CleanedCloud:
+    """Voxel centroids of ``points`` (``voxel_m``, grown to fit ``max_points``; the points
+    themselves where that merges less than ``min_merged_fraction`` of them) without the isolated
+    ones."""
+    n = points.shape[0]
+    thinned, inverse = points, np.arange(n, dtype=np.int64)
+    if config.voxel_m > 0 and n > 0:
+        down = downsample_to_budget(points, config.voxel_m, config.max_points)
+        merged = 1.0 - len(down.points) / n
+        if n > config.max_points or merged >= config.min_merged_fraction:
+            thinned, inverse = down.points, down.inverse
+    keep = ~isolated_mask(thinned, config)
+    row = np.full(thinned.shape[0], -1, dtype=np.int64)
+    row[keep] = np.arange(int(np.count_nonzero(keep)))
+    return CleanedCloud(thinned[keep], row[inverse] if n else inverse)
 
 
 def all_removed_reason(n_points: int, config: CleaningConfig) -> str:

@@ -1,16 +1,19 @@
 """Planner configuration: ``configs/planner.yaml`` loaded into typed, frozen dataclasses.
 
 Three sections: ``cleaning`` (before both stages, :mod:`hsqbench.planner.cleaning`), ``recovery``
-(stage one) and ``grasp`` (stage two). Every default here is mirrored, with its reason, in
-``configs/planner.yaml``.
+(stage one) and ``grasp`` (stage two), and ``additions``: one switch per addition of ours to the
+paper (:mod:`hsqbench.planner.additions`); a switch that is off sets the paper's values in its
+section. Every default here is mirrored, with its reason, in ``configs/planner.yaml``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from hsqbench.config import load_config
+from hsqbench.planner.additions import ADDITIONS, AdditionsConfig
 from hsqbench.planner.cleaning import CleaningConfig
 
 
@@ -106,12 +109,14 @@ class GraspConfig:
     flat_eps_max: float = 0.5
     round_eps2_tol: float = 0.25
     round_axis_ratio_tol: float = 0.1
-    max_tilt_deg: float = 15.0
+    max_tilt_deg: float = 26.6
     slide_all_shapes: bool = True
     min_part_scale_m: float = 0.0025
     level_table_lines: bool = True
     level_max_angle_deg: float = 45.0
-    # Elimination.
+    pinch_max_lift_m: float = 0.008
+    # Elimination (sweep_rule: set by additions.sweep).
+    sweep_rule: bool = True
     duplicate_distance_m: float = 0.003
     duplicate_angle_deg: float = 3.0
     elimination_voxel_m: float = 0.003
@@ -163,6 +168,7 @@ class GraspConfig:
             "max_tilt_deg": self.max_tilt_deg,
             "min_part_scale_m": self.min_part_scale_m,
             "level_max_angle_deg": self.level_max_angle_deg,
+            "pinch_max_lift_m": self.pinch_max_lift_m,
             "opening_margin_m": self.opening_margin_m,
             "support_min_points": self.support_min_points,
             "support_min_fraction": self.support_min_fraction,
@@ -180,9 +186,25 @@ class GraspConfig:
 
 @dataclass(frozen=True)
 class PlannerConfig:
+    """The planner's sections, with the paper's values set for every addition switched off."""
+
     cleaning: CleaningConfig = field(default_factory=CleaningConfig)
     recovery: RecoveryConfig = field(default_factory=RecoveryConfig)
     grasp: GraspConfig = field(default_factory=GraspConfig)
+    additions: AdditionsConfig = field(default_factory=AdditionsConfig)
+
+    def __post_init__(self) -> None:
+        for name in self.additions.off():
+            addition = ADDITIONS[name]
+            section = getattr(self, addition.section)
+            object.__setattr__(
+                self, addition.section, dataclasses.replace(section, **addition.paper)
+            )
+
+    def with_additions(self, additions: AdditionsConfig) -> PlannerConfig:
+        """This config with other switches (switching one back on does not restore a value
+        that an off switch replaced: start from the file's config for that)."""
+        return dataclasses.replace(self, additions=additions)
 
 
 def load_planner_config(path: str | Path | None = "planner") -> PlannerConfig:

@@ -40,7 +40,7 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
    the line; cloud points between its end planes but outside it are obstacles, and a pose whose
    gripper body (two open fingers and the palm) holds any of them goes (more than
    ``max_obstacle_points`` of them: 0, the paper's rule, by default).
-5. ``sweep`` (addition): the paper only looks between the end planes. Any cloud point in the
+5. ``sweep`` (addition, ``sweep_rule``): the paper only looks between the end planes. Any cloud point in the
    volume the hand sweeps also removes the pose: the open fingers, and the palm swept back by
    ``approach_distance_m`` (the straight-line approach from the pre-grasp pose). E.g. the body of
    a mug beside a finger that grips its handle.
@@ -515,9 +515,12 @@ def eliminate(
     hits = body_hits(points, cands, lines, body, radius, half_height, tolerated)
     apply("collision", lines, hits)
 
-    lines = alive_lines()
-    swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
-    apply("sweep", lines, body_hits(points, cands, lines, swept, max_points=tolerated))
+    if config.sweep_rule:
+        lines = alive_lines()
+        swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
+        apply("sweep", lines, body_hits(points, cands, lines, swept, max_points=tolerated))
+    else:
+        remaining["sweep"] = remaining["collision"]
 
     names = np.array((KEPT, *REJECTION_REASONS), dtype=cands.rejected_by.dtype)
     cands.rejected_by = names[code.ravel()]

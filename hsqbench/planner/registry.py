@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from hsqbench.planner.additions import AdditionsConfig, ablation_planners
+
 if TYPE_CHECKING:
     from hsqbench.planner.api import Planner
 
@@ -39,6 +41,17 @@ def _antipodal(config: Any = None) -> Planner:
     return AntipodalPlanner(config)
 
 
+def _hsq_without(off: tuple[str, ...], name: str) -> PlannerFactory:
+    """hsq with the additions ``off`` switched off (hsqbench.planner.additions)."""
+
+    def factory(config: Any = None) -> Planner:
+        from hsqbench.planner.api import HSQPlanner
+
+        return HSQPlanner(config, additions_off=off, name=name)
+
+    return factory
+
+
 def _oracle(config: Any = None) -> Planner:
     from hsqbench.planner.oracle import OraclePlanner
 
@@ -59,6 +72,9 @@ _FACTORIES: dict[str, PlannerFactory] = {
     "antipodal": _antipodal,
     "contact-graspnet": _contact_graspnet,
     "contact-graspnet-elim": lambda config=None: _contact_graspnet(config, eliminate=True),
+    # The paper's rules alone, and hsq with one addition off (the ablation planners).
+    "hsq-paper": _hsq_without(tuple(AdditionsConfig.names()), "hsq-paper"),
+    **{name: _hsq_without((addition,), name) for name, addition in ablation_planners().items()},
     # Privileged: reads the true meshes, not the cloud (hsqbench.planner.oracle).
     "oracle": _oracle,
 }

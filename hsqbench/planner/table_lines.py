@@ -23,6 +23,12 @@ repaired line replaces the original (family ``levelled``) if it is still antipod
 inside the superquadric and the surface normal at both contacts within ``max_tilt_deg`` of the
 line, the test the paper's moved lines pass (:mod:`hsqbench.planner.synthesis`). Every rule of
 elimination then runs on it as on any line.
+
+Pinch (``pinch_max_lift_m``): a part thinner than twice the fingertips' clearance (12 mm above
+the table) has no antipodal line at the lifted height. A Franka hand then pinches it with the
+lower ends of its pads: the contacts stay where the levelled line meets the superquadric, and
+the line (the hand) is lifted by at most ``pinch_max_lift_m``, so the pads, 17 mm tall about the
+line, still cover the part's side from 3 mm above the table up. Family ``pinched``.
 """
 
 from __future__ import annotations
@@ -39,8 +45,10 @@ from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.shape_rows import ShapeRows
 from hsqbench.superquadric import Superquadric
 
-#: Family name of a repaired line (``ClosingLines.family``, ``Grasp.family``).
+#: Family names of a repaired line (``ClosingLines.family``, ``Grasp.family``): levelled and
+#: lifted, or levelled with only the hand lifted (a pinch, module docstring).
 LEVELLED = "levelled"
+PINCHED = "pinched"
 #: Extra lift beyond the exact clearance, metres: the repaired line must pass the table rule's
 #: ``>=`` test despite float rounding.
 _LIFT_SLACK_M = 1e-5
@@ -87,22 +95,37 @@ def level_table_lines(
     src = L.source[idx]
     rot = np.array([sq.rotation for sq in superquadrics]).reshape(-1, 3, 3)[src]
     trans = np.array([sq.translation for sq in superquadrics]).reshape(-1, 3)[src]
-    o = np.einsum("nji,nj->ni", rot, start - trans)
-    dl = np.einsum("nji,nj->ni", rot, d)
     shapes = ShapeRows.of(superquadrics, src)
-    inside = shapes.inside_outside_pow(o) < 1.0
-    t_pos = shapes.contact_distance(o, dl)
-    t_neg = shapes.contact_distance(o, -dl)
+    dl = np.einsum("nji,nj->ni", rot, d)
     cos_min = np.cos(np.deg2rad(config.max_tilt_deg))
-    ok = inside.copy()
-    for t, sign in ((t_pos, 1.0), (t_neg, -1.0)):
-        grad = shapes.gradient(o + sign * t[:, None] * dl)
-        cos = sign * np.einsum("ij,ij->i", grad, dl) / np.linalg.norm(grad, axis=1)
-        ok &= cos >= cos_min
-    idx, d, start, t_pos, t_neg = (x[ok] for x in (idx, d, start, t_pos, t_neg))
+
+    def contacts(points: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """Whether a line from ``points`` along ``d`` is antipodal, and its two contacts."""
+        o = np.einsum("nji,nj->ni", rot, points - trans)
+        ok = shapes.inside_outside_pow(o) < 1.0
+        t_pos = shapes.contact_distance(o, dl)
+        t_neg = shapes.contact_distance(o, -dl)
+        for t, sign in ((t_pos, 1.0), (t_neg, -1.0)):
+            grad = shapes.gradient(o + sign * t[:, None] * dl)
+            cos = sign * np.einsum("ij,ij->i", grad, dl) / np.linalg.norm(grad, axis=1)
+            ok &= cos >= cos_min
+        return ok, t_pos, t_neg
+
+    ok, t_pos, t_neg = contacts(start)
+    # Pinch: where the lifted line leaves the superquadric (a part thinner than the fingertips'
+    # clearance) or its side, the contacts stay at the line's own height and only the hand is
+    # lifted, so the pads hold the part with their lower ends (at most pinch_max_lift_m).
+    lift = (start - L.centres[idx]) @ normal
+    pinch = ~ok & (lift <= config.pinch_max_lift_m)
+    if np.any(pinch):
+        ok_low, t_pos_low, t_neg_low = contacts(L.centres[idx])
+        pinch &= ok_low
+        t_pos, t_neg = np.where(pinch, t_pos_low, t_pos), np.where(pinch, t_neg_low, t_neg)
+        ok |= pinch
+    idx, d, start, t_pos, t_neg, pinch = (x[ok] for x in (idx, d, start, t_pos, t_neg, pinch))
     L.centres[idx] = start + 0.5 * (t_pos - t_neg)[:, None] * d
     L.directions[idx] = d
     L.approach0[idx] = -normal
     L.half_lengths[idx] = 0.5 * (t_pos + t_neg)
-    L.family[idx] = LEVELLED
+    L.family[idx] = np.where(pinch, PINCHED, LEVELLED)
     return idx

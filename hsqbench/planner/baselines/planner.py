@@ -20,7 +20,12 @@ from hsqbench.planner.api import (
     validate_cloud,
 )
 from hsqbench.planner.baselines.config import BaselinesConfig, resolve_baselines_config
-from hsqbench.planner.cleaning import CleaningConfig, all_removed_reason, clean_cloud
+from hsqbench.planner.cleaning import (
+    CleanedCloud,
+    CleaningConfig,
+    all_removed_reason,
+    clean_cloud,
+)
 from hsqbench.planner.gripper import GripperModel
 
 
@@ -30,19 +35,24 @@ class CleanInput:
 
     Attributes:
         points: (M, 3) the points kept, metres.
-        kept: (M,) their indices in the caller's cloud.
+        source: (N,) for each of the caller's points, the row of ``points`` it was merged into
+            (-1: removed); see :class:`~hsqbench.planner.cleaning.CleanedCloud`.
         n_input: points the caller gave.
         seconds: wall-clock time of validation and cleaning.
     """
 
     points: NDArray[np.float64]
-    kept: NDArray[np.int64]
+    cleaned: CleanedCloud
     n_input: int
     seconds: float
 
     @property
     def n_removed(self) -> int:
-        return self.n_input - int(self.points.shape[0])
+        return self.cleaned.n_removed
+
+    def input_indices(self, rows: NDArray[np.int64]) -> NDArray[np.int64]:
+        """The caller's points merged into ``rows`` of ``points``."""
+        return self.cleaned.input_indices(rows)
 
     def empty_result(self, config: CleaningConfig, planner: str) -> PlanResult:
         """The result when cleaning left no point (the hsq planner answers the same)."""
@@ -56,7 +66,7 @@ class CleanInput:
 
 
 def clean_input(points: ArrayLike, config: CleaningConfig) -> CleanInput:
-    """Validate ``points`` and remove isolated points (flying pixels) as the hsq planner does
+    """Validate ``points``, thin them and remove isolated points (flying pixels) as the hsq planner does
     (:func:`~hsqbench.planner.cleaning.clean_cloud`), so that a stray point in a finger's path
     removes a baseline's grasp no more than hsq's.
 
@@ -65,8 +75,8 @@ def clean_input(points: ArrayLike, config: CleaningConfig) -> CleanInput:
     """
     start = time.perf_counter()
     raw = validate_cloud(points)
-    cloud, kept = clean_cloud(raw, config)
-    return CleanInput(cloud, kept, int(raw.shape[0]), time.perf_counter() - start)
+    cleaned = clean_cloud(raw, config)
+    return CleanInput(cleaned.points, cleaned, int(raw.shape[0]), time.perf_counter() - start)
 
 
 class BaselinePlanner:

@@ -122,7 +122,7 @@ def plan_single_sq(
     # A loop over objects (at most a handful), each fit vectorised over its points.
     fits = [_one_superquadric(cloud, g, i, rcfg) for i, g in enumerate(groups)]
     # Inliers index the caller's cloud, not the cleaned one (as hsq's).
-    hidden = [dataclasses.replace(h, inliers=clean.kept[h.inliers]) for h in fits]
+    hidden = [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in fits]
     t_recovery = time.perf_counter() - start_recovery
     if not hidden:
         result = PlanResult(

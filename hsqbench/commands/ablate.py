@@ -1,0 +1,102 @@
+"""``hsqbench ablate``: the benchmark with hsq, hsq-paper and hsq with each addition off.
+
+It only builds the planner list (``hsq``, ``hsq-paper``, ``hsq-no-<addition>`` for each chosen
+addition of :mod:`hsqbench.planner.additions`, plus any ``--with`` baselines) and runs the
+protocol's experiments with it through the benchmark runner, into results/<run>/ with the usual
+tables: each row against ``hsq`` is what that addition buys.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from pathlib import Path
+
+HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions off in turn"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--config", default="paper", help="protocol: paper, quick, or a YAML path (default: paper)"
+    )
+    parser.add_argument(
+        "--run", default=None, metavar="NAME", help="run name under results/ (or a folder path)"
+    )
+    parser.add_argument(
+        "--additions",
+        nargs="+",
+        default=None,
+        metavar="NAME",
+        help="only these additions (default: all; see configs/planner.yaml additions:)",
+    )
+    parser.add_argument(
+        "--with",
+        dest="extra",
+        nargs="+",
+        default=(),
+        metavar="PLANNER",
+        help="other planners to run alongside, e.g. antipodal",
+    )
+    parser.add_argument("--jobs", type=int, default=None, help="worker processes")
+    parser.add_argument("--executor", choices=("local", "ray"), default="local")
+    parser.add_argument("--experiments", nargs="+", choices=("isolated", "packed"), default=None)
+    parser.add_argument("--resume", action="store_true", help="continue the run --run NAME")
+    parser.add_argument("--force", action="store_true", help="move an existing run folder aside")
+    parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
+
+
+def ablation_planner_list(additions: list[str] | None, extra: tuple[str, ...] = ()) -> list[str]:
+    """``hsq``, ``hsq-paper``, then ``hsq-no-<name>`` per addition, then ``extra``.
+
+    Raises:
+        ValueError: an unknown addition (the message lists the known ones).
+    """
+    from hsqbench.planner.additions import AdditionsConfig, planner_name
+
+    known = AdditionsConfig.names()
+    chosen = known if additions is None else list(additions)
+    unknown = [a for a in chosen if a not in known]
+    if unknown:
+        raise ValueError(f"unknown addition(s) {unknown}; known: {', '.join(known)}")
+    names = ["hsq", "hsq-paper", *(planner_name(a) for a in chosen), *extra]
+    return list(dict.fromkeys(names))
+
+
+def run(args: argparse.Namespace) -> int:
+    import sys
+
+    from hsqbench.cli import CommandError
+    from hsqbench.commands.benchmark import _run_dir
+    from hsqbench.experiment.backend import TrialRunnerUnavailable
+    from hsqbench.experiment.config import load_experiment_config
+    from hsqbench.experiment.executor import make_executor
+    from hsqbench.experiment.runner import run_benchmark
+
+    if args.resume and args.run is None:
+        raise CommandError("--resume needs --run NAME (the run to continue)")
+    planners = ablation_planner_list(args.additions, tuple(args.extra))
+    config = dataclasses.replace(load_experiment_config(args.config), planners=tuple(planners))
+    run_dir = _run_dir(args.run, f"ablate-{Path(args.config).stem}")
+    print(f"run folder: {run_dir}; planners: {', '.join(planners)}", file=sys.stderr)
+    try:
+        summary = run_benchmark(
+            config,
+            run_dir,
+            executor=make_executor(args.executor, args.jobs),
+            experiments=args.experiments,
+            resume=args.resume,
+            force=args.force,
+            config_name=f"{args.config} (ablation)",
+        )
+    except TrialRunnerUnavailable as exc:
+        raise CommandError(f"cannot run the ablation: {exc}") from exc
+    print(
+        f"{run_dir}: {summary.selected} trials selected, {summary.skipped} already done, "
+        f"{summary.ran} run, {summary.errors} errors (config hash {summary.config_hash})"
+    )
+    if not args.no_report:
+        from hsqbench.experiment.report import write_report
+
+        written = write_report(run_dir)
+        print(f"report: {run_dir / 'tables.md'} (+{len(written) - 1} files)")
+    return 1 if summary.errors else 0

@@ -1,0 +1,57 @@
+"""``hsqbench ablate``: the planner list it builds and hands to the benchmark runner."""
+
+from __future__ import annotations
+
+import pytest
+
+from hsqbench.cli import main
+from hsqbench.commands.ablate import ablation_planner_list
+from hsqbench.planner.additions import AdditionsConfig
+from hsqbench.planner.registry import planner_names
+
+
+def test_the_list_is_hsq_the_paper_and_one_planner_per_addition() -> None:
+    names = ablation_planner_list(None)
+    assert names[:2] == ["hsq", "hsq-paper"]
+    assert len(names) == 2 + len(AdditionsConfig.names())
+    assert set(names) <= set(planner_names())
+    assert ablation_planner_list(["sweep"], ("antipodal",)) == [
+        "hsq",
+        "hsq-paper",
+        "hsq-no-sweep",
+        "antipodal",
+    ]
+    with pytest.raises(ValueError, match="unknown addition"):
+        ablation_planner_list(["no_such_thing"])
+
+
+def test_the_command_runs_the_benchmark_with_that_list(monkeypatch, tmp_path) -> None:
+    seen = {}
+
+    class Summary:
+        selected = skipped = ran = errors = 0
+        config_hash = "x"
+
+    def fake_run(config, run_dir, **kwargs):
+        seen["planners"] = config.planners
+        seen["run_dir"] = run_dir
+        return Summary()
+
+    monkeypatch.setattr("hsqbench.experiment.runner.run_benchmark", fake_run)
+    run = tmp_path / "abl"
+    code = main(
+        [
+            "ablate",
+            "--config",
+            "quick",
+            "--run",
+            str(run),
+            "--additions",
+            "sweep",
+            "caps",
+            "--no-report",
+        ]
+    )
+    assert code == 0
+    assert seen["planners"] == ("hsq", "hsq-paper", "hsq-no-sweep", "hsq-no-caps")
+    assert str(seen["run_dir"]) == str(run)
