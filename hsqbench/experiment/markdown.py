@@ -111,6 +111,8 @@ def render_markdown(
         for obj in data.objects:
             sub = t1o[t1o["object"] == obj].set_index("planner")
             cells = [obj]
+            if sub.empty:  # every trial of this object failed with an error
+                continue
             if graspability:  # the same poses for every planner: take the first one's count
                 first = sub.iloc[0]
                 cells.append(f"{int(first['graspable_attempts'])}/{int(first['attempts'])}")
