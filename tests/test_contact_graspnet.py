@@ -44,10 +44,16 @@ SEEDS = range(5)
 
 
 @pytest.fixture(scope="module")
-def planner():
-    from hsqbench.planner.registry import get_planner
+def planner(tmp_path_factory):
+    """The default planner, on the planner config without the voxel thinning of the shared
+    cleaning: these tests check the network's frames on the cloud as given."""
+    from hsqbench.planner.learned.config import resolve_contact_graspnet_config
+    from hsqbench.planner.learned.contact_graspnet import ContactGraspNetPlanner
 
-    return get_planner("contact-graspnet")
+    unthinned = tmp_path_factory.mktemp("cgn") / "planner_unthinned.yaml"
+    unthinned.write_text("extends: planner\nadditions:\n  thinning: false\n")
+    config = dataclasses.replace(resolve_contact_graspnet_config(None), planner=str(unthinned))
+    return ContactGraspNetPlanner(config)
 
 
 @pytest.fixture(scope="module")
@@ -76,15 +82,19 @@ def closes_on_opposite_faces(grasp) -> bool:
 
 def test_every_grasp_has_a_finger_on_the_cloud_and_scores_in_order(planner):
     """The whole frame chain (world -> network frame -> poses -> Grasp): one finger of every grasp
-    sits on the contact point the network chose, a point of the cloud it was given (with the
-    input voxels off, so that the network sees the cloud's own points)."""
+    sits on the contact point the network chose, a point of the cloud it was given: the cleaned
+    cloud (the planners' shared cleaning thins a dense cloud to voxel centroids), with the
+    adapter's own input voxels off."""
+    from hsqbench.planner.api import resolve_config
+    from hsqbench.planner.baselines.planner import clean_input
     from hsqbench.planner.learned.contact_graspnet import ContactGraspNetPlanner
 
     exact = ContactGraspNetPlanner(dataclasses.replace(planner.config, input_voxel_m=0.0))
     result = exact.plan(box_cloud(), context(2))
     assert result.planner == "contact-graspnet"
     assert len(result.grasps) >= 3, result.reason
-    cloud = box_cloud()
+    cleaning = resolve_config(planner.config.planner).cleaning
+    cloud = clean_input(box_cloud(), cleaning).points
     scores = [g.score for g in result.grasps]
     assert scores == sorted(scores, reverse=True)
     assert all(0.5 <= s <= 1.0 for s in scores)
@@ -119,10 +129,10 @@ def test_same_seed_same_grasps_and_timings_reported(planner, plans):
     assert first.timings["network"] > 0 and first.timings["total"] >= first.timings["network"]
 
 
-def test_elimination_variant_keeps_only_grasps_that_pass_the_rules(plans):
-    from hsqbench.planner.registry import get_planner
+def test_elimination_variant_keeps_only_grasps_that_pass_the_rules(planner, plans):
+    from hsqbench.planner.learned.contact_graspnet import ContactGraspNetPlanner
 
-    elim = get_planner("contact-graspnet-elim")
+    elim = ContactGraspNetPlanner(planner.config, eliminate=True, name="contact-graspnet-elim")
     survivors = []
     for seed, plain in zip(SEEDS, plans, strict=True):
         plan = elim.plan(box_cloud(), context(seed))
