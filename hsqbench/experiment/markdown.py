@@ -31,7 +31,9 @@ def _pct(value: float) -> str:
 
 
 def _kn(row: pd.Series, k: str, n: str) -> str:
-    return f"{int(row[k])}/{int(row[n])}" if np.isfinite(row.get(n, np.nan)) else "—"
+    """``k/n``, or a dash where there is nothing to count (an older run without the column)."""
+    total = row.get(n, np.nan)
+    return f"{int(row[k])}/{int(total)}" if np.isfinite(total) and total > 0 else "—"
 
 
 def _interval(row: pd.Series, prefix: str = "") -> str:
@@ -113,9 +115,14 @@ def render_markdown(
             cells = [obj]
             if sub.empty:  # every trial of this object failed with an error
                 continue
-            if graspability:  # the same poses for every planner: take the first one's count
-                first = sub.iloc[0]
-                cells.append(f"{int(first['graspable_attempts'])}/{int(first['attempts'])}")
+            if graspability:  # the same poses for every planner: the first checked one's count
+                checked = sub[sub["checked"] > 0]
+                first = checked.iloc[0] if len(checked) else None
+                cells.append(
+                    "—"
+                    if first is None
+                    else f"{int(first['graspable_attempts'])}/{int(first['checked'])}"
+                )
             for p in planners:
                 if p in sub.index:
                     r = sub.loc[p]
