@@ -90,13 +90,7 @@ def run(args: argparse.Namespace) -> int:
         )
     except TrialRunnerUnavailable as exc:
         raise CommandError(f"cannot run the ablation: {exc}") from exc
-    print(
-        f"{run_dir}: {summary.selected} trials selected, {summary.skipped} already done, "
-        f"{summary.ran} run, {summary.errors} errors (config hash {summary.config_hash})"
-    )
-    if not args.no_report:
-        from hsqbench.experiment.report import write_report
+    from hsqbench.commands.benchmark import print_summary
 
-        written = write_report(run_dir)
-        print(f"report: {run_dir / 'tables.md'} (+{len(written) - 1} files)")
+    print_summary(run_dir, summary, report=not args.no_report)
     return 1 if summary.errors else 0

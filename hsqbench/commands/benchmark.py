@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from hsqbench.experiment.runner import RunSummary
 
 HELP = "run the isolated and packed experiments of a protocol config and write results/<run>/"
 
@@ -151,15 +155,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
-    print(
-        f"{run_dir}: {summary.selected} trials selected, {summary.skipped} already done, "
-        f"{summary.ran} run, {summary.errors} errors (config hash {summary.config_hash})"
-    )
-    if not args.no_report:
-        from hsqbench.experiment.report import write_report
-
-        written = write_report(run_dir)
-        print(f"report: {run_dir / 'tables.md'} (+{len(written) - 1} files)")
+    print_summary(run_dir, summary, report=not args.no_report)
     if args.rerun_dir is not None:
         _record_episodes(run_dir, args)
     if summary.errors:
@@ -170,6 +166,20 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def print_summary(run_dir: Path, summary: RunSummary, report: bool) -> None:
+    """The run's one-line summary, then its tables and plots unless ``report`` is False (shared
+    by ``benchmark`` and ``ablate``)."""
+    print(
+        f"{run_dir}: {summary.selected} trials selected, {summary.skipped} already done, "
+        f"{summary.ran} run, {summary.errors} errors (config hash {summary.config_hash})"
+    )
+    if report:
+        from hsqbench.experiment.report import write_report
+
+        written = write_report(run_dir)
+        print(f"report: {run_dir / 'tables.md'} (+{len(written) - 1} files)")
 
 
 def _record_episodes(run_dir: Path, args: argparse.Namespace) -> None:

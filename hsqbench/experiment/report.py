@@ -173,6 +173,19 @@ def _rate_cells(rate: Rate | None) -> dict[str, Any]:
     }
 
 
+def _rate_columns(rate: Rate | None, value: str, ci: str, k: str, n: str) -> dict[str, Any]:
+    """A rate as table columns: ``value`` (%), ``<ci>ci_low_percent``, ``<ci>ci_high_percent``,
+    successes ``k`` and trials ``n``."""
+    c = _rate_cells(rate)
+    return {
+        value: 100 * c["rate"],
+        f"{ci}ci_low_percent": 100 * c["low"],
+        f"{ci}ci_high_percent": 100 * c["high"],
+        k: c["successes"],
+        n: c["trials"],
+    }
+
+
 def _gsr(df: pd.DataFrame, confidence: float) -> Rate | None:
     n = len(df)
     return Rate.of(int(df["success"].sum()), n, confidence) if n else None
@@ -189,22 +202,19 @@ def table1(data: RunData) -> pd.DataFrame:
         errors = _errors(data.attempts, "isolated", p)
         if rate is None and not errors:
             continue
-        cells = _rate_cells(rate)
-        g = _rate_cells(gsr_graspable(ok, data.confidence) if len(ok) else None)
+        graspable = gsr_graspable(ok, data.confidence) if len(ok) else None
         rows.append(
             {
                 "method": method_label(p),
                 "source": data.measured,
-                "gsr_percent": 100 * cells["rate"],
-                "ci_low_percent": 100 * cells["low"],
-                "ci_high_percent": 100 * cells["high"],
-                "successes": cells["successes"],
-                "attempts": cells["trials"],
-                "graspable_gsr_percent": 100 * g["rate"],
-                "graspable_ci_low_percent": 100 * g["low"],
-                "graspable_ci_high_percent": 100 * g["high"],
-                "graspable_successes": g["successes"],
-                "graspable_attempts": g["trials"],
+                **_rate_columns(rate, "gsr_percent", "", "successes", "attempts"),
+                **_rate_columns(
+                    graspable,
+                    "graspable_gsr_percent",
+                    "graspable_",
+                    "graspable_successes",
+                    "graspable_attempts",
+                ),
                 "errors": errors,
             }
         )
@@ -264,33 +274,28 @@ def table2(data: RunData) -> pd.DataFrame:
         errors = _errors(data.attempts, "packed", p)
         if gsr is None and cr is None and not errors:
             continue
-        g, c = _rate_cells(gsr), _rate_cells(cr)
-        gg = _rate_cells(gsr_graspable(ok, data.confidence) if len(ok) else None)
-        cg = _rate_cells(cr_graspable(rounds, data.confidence) if len(rounds) else None)
+        gsr_g = gsr_graspable(ok, data.confidence) if len(ok) else None
+        cr_g = cr_graspable(rounds, data.confidence) if len(rounds) else None
         rows.append(
             {
                 "method": method_label(p),
                 "source": data.measured,
-                "gsr_percent": 100 * g["rate"],
-                "gsr_ci_low_percent": 100 * g["low"],
-                "gsr_ci_high_percent": 100 * g["high"],
-                "successes": g["successes"],
-                "attempts": g["trials"],
-                "cr_percent": 100 * c["rate"],
-                "cr_ci_low_percent": 100 * c["low"],
-                "cr_ci_high_percent": 100 * c["high"],
-                "objects_cleared": c["successes"],
-                "objects_presented": c["trials"],
-                "graspable_gsr_percent": 100 * gg["rate"],
-                "graspable_gsr_ci_low_percent": 100 * gg["low"],
-                "graspable_gsr_ci_high_percent": 100 * gg["high"],
-                "graspable_successes": gg["successes"],
-                "graspable_attempts": gg["trials"],
-                "graspable_cr_percent": 100 * cg["rate"],
-                "graspable_cr_ci_low_percent": 100 * cg["low"],
-                "graspable_cr_ci_high_percent": 100 * cg["high"],
-                "graspable_objects_cleared": cg["successes"],
-                "graspable_objects_presented": cg["trials"],
+                **_rate_columns(gsr, "gsr_percent", "gsr_", "successes", "attempts"),
+                **_rate_columns(cr, "cr_percent", "cr_", "objects_cleared", "objects_presented"),
+                **_rate_columns(
+                    gsr_g,
+                    "graspable_gsr_percent",
+                    "graspable_gsr_",
+                    "graspable_successes",
+                    "graspable_attempts",
+                ),
+                **_rate_columns(
+                    cr_g,
+                    "graspable_cr_percent",
+                    "graspable_cr_",
+                    "graspable_objects_cleared",
+                    "graspable_objects_presented",
+                ),
                 "rounds": len(rounds),
                 "errors": errors,
             }
