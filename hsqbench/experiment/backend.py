@@ -16,7 +16,7 @@ import os
 import socket
 import time
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
 from hsqbench.experiment.seeds import TrialSpec
@@ -157,22 +157,25 @@ class SimBackend:
 
     The trial module must provide ``TrialConfig`` (a config dataclass),
     ``run_isolated_trial(object, seed, planner, config)`` and
-    ``run_packed_round(objects, seed, planner, config)``. The config is loaded once per process.
+    ``run_packed_round(objects, seed, planner, config)``. The config is loaded once per process,
+    with ``overrides`` (dotted paths into the trial's config tree, :mod:`hsqbench.overrides`).
     """
 
     trial_config: str = "trial"
     name: str = "sim"
+    overrides: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self._config: Any = None
         self._scene: Any = None
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"trial_config": self.trial_config, "name": self.name}
+        return {"trial_config": self.trial_config, "name": self.name, "overrides": self.overrides}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.trial_config = state["trial_config"]
         self.name = state["name"]
+        self.overrides = state.get("overrides", {})
         self._config = None
         self._scene = None
 
@@ -201,9 +204,11 @@ class SimBackend:
 
     def _trial_config(self) -> Any:
         if self._config is None:
-            from hsqbench.config import load_config
+            from hsqbench.overrides import load_trial_tree
 
-            self._config = load_config(self._module().TrialConfig, self.trial_config)
+            self._config = load_trial_tree(
+                self._module().TrialConfig, self.trial_config, self.overrides
+            )
         return self._config
 
     def fingerprint(self) -> dict[str, Any]:
@@ -211,30 +216,29 @@ class SimBackend:
         perception, the planners' and the object library's), so editing any of them changes
         the run's config hash and a resume cannot mix results from different settings."""
         from hsqbench.config import to_dict
+        from hsqbench.overrides import TRIAL_PARTS, load_part, part_class
 
         tc = self._trial_config()
         out: dict[str, Any] = {"backend": self.name, "trial_config": to_dict(tc)}
+        given = getattr(tc, "overrides", {})
+        if not given:  # runs without overrides keep the hash they had before overrides existed
+            out["trial_config"].pop("overrides", None)
         try:
             from hsqbench.assets.config import load_assets_config
             from hsqbench.planner.api import resolve_config, resolve_gripper
             from hsqbench.planner.baselines.config import resolve_baselines_config
-            from hsqbench.sim.perception import load_perception_config
-            from hsqbench.sim.physics import load_physics_config
-            from hsqbench.sim.robot import load_robot_config
-            from hsqbench.sim.scene import load_scene_config
+
+            for part in TRIAL_PARTS:
+                part_class(part)
         except ImportError:
             return out
-        named = {
-            "scene": load_scene_config,
-            "robot": load_robot_config,
-            "physics": load_physics_config,
-            "perception": load_perception_config,
-        }
-        contents = {
-            key: to_dict(load(getattr(tc, key)))
-            for key, load in named.items()
+        # Each part as loaded for the trials, the overrides applied.
+        parts = {
+            key: load_part(getattr(tc, key), key, given)
+            for key in TRIAL_PARTS
             if isinstance(getattr(tc, key, None), str)
         }
+        contents = {key: to_dict(part) for key, part in parts.items()}
         # planner_config is handed to every planner; None means each planner's own default.
         chosen = getattr(tc, "planner_config", None)
         if chosen is None:
@@ -250,7 +254,7 @@ class SimBackend:
         if isinstance(getattr(tc, "scene", None), str):
             from hsqbench.sim.scene import world_files
 
-            contents["scene_world"] = world_files(load_scene_config(tc.scene))
+            contents["scene_world"] = world_files(parts["scene"])
         # The oracle's (graspability and the oracle planner) and the learned planner's own files.
         if getattr(tc, "graspability", None) is not None:
             contents["oracle"] = _config_text(tc.graspability)
@@ -288,10 +292,12 @@ class SimBackend:
 
     def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
         """The scene builder's own placement with the trial config's scene, without a model."""
-        from hsqbench.sim.scene import load_scene_config, packed_placeable
+        from hsqbench.overrides import load_part
+        from hsqbench.sim.scene import packed_placeable
 
         if self._scene is None:
-            self._scene = load_scene_config(self._trial_config().scene)
+            tc = self._trial_config()
+            self._scene = load_part(tc.scene, "scene", getattr(tc, "overrides", {}))
         return packed_placeable(objects, seed, self._scene)
 
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult:

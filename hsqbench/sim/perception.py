@@ -43,17 +43,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hsqbench.config import load_config
 from hsqbench.planner.api import validate_plane
-from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.sim.camera import (
     backproject,
     box_roi,
@@ -62,225 +59,47 @@ from hsqbench.sim.camera import (
     crop_intrinsics,
     transform_points,
 )
-from hsqbench.sim.sensor_noise import (
-    CalibrationErrorConfig,
-    TofNoiseConfig,
-    apply_tof_noise,
-    calibration_errors,
+from hsqbench.sim.depth_renderer import DepthRenderer
+from hsqbench.sim.perceived import CameraView, PerceivedCloud, PerceptionTimings
+from hsqbench.sim.perception_config import (
+    SENSOR_MODELS,
+    CropConfig,
+    PerceptionConfig,
+    SensorModel,
+    load_perception_config,
+)
+from hsqbench.sim.sensor_noise import apply_tof_noise, calibration_errors
+from hsqbench.sim.table_crop import (
+    fit_plane,
+    fuse_and_downsample,
+    refit_table_plane,
+    workspace_mask,
 )
 
 if TYPE_CHECKING:
     from hsqbench.sim.scene import DepthCamera, SceneInfo
 
+__all__ = [
+    "ROI_PAD_PX",
+    "SENSOR_MODELS",
+    "CameraView",
+    "CropConfig",
+    "PerceivedCloud",
+    "Perception",
+    "PerceptionConfig",
+    "PerceptionTimings",
+    "SensorModel",
+    "fit_plane",
+    "fuse_and_downsample",
+    "load_perception_config",
+    "refit_table_plane",
+    "workspace_mask",
+]
+
 Array = NDArray[np.float64]
-SensorModel = Literal["none", "tof", "calibration", "tof+calibration"]
-SENSOR_MODELS: tuple[str, ...] = ("none", "tof", "calibration", "tof+calibration")
 #: Pixels added around the crop box's image rectangle: the noise model's 3 x 3 neighbourhoods
 #: and central differences need one, and one more absorbs rounding.
 ROI_PAD_PX = 2
-
-
-@dataclass(frozen=True)
-class CropConfig:
-    """Workspace crop and table removal. Lengths in metres."""
-
-    workspace_margin_m: float = 0.02
-    table_margin_m: float = 0.005
-    refit_table: bool = True
-    refit_band_m: float = 0.015
-    refit_inlier_m: float = 0.004
-    refit_max_tilt_deg: float = 2.0
-    refit_min_points: int = 500
-
-    def __post_init__(self) -> None:
-        for name in ("workspace_margin_m", "table_margin_m", "refit_band_m", "refit_inlier_m"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"{name} must be >= 0 metres, got {getattr(self, name)}")
-        if self.refit_min_points < 3:
-            raise ValueError(f"refit_min_points must be >= 3, got {self.refit_min_points}")
-
-
-@dataclass(frozen=True)
-class PerceptionConfig:
-    """``configs/perception.yaml``; see the comments there for every value's reason."""
-
-    sensor_model: SensorModel = "tof+calibration"
-    tof: TofNoiseConfig = field(default_factory=TofNoiseConfig)
-    calibration: CalibrationErrorConfig = field(default_factory=CalibrationErrorConfig)
-    crop: CropConfig = field(default_factory=CropConfig)
-    voxel_m: float = 0.002
-    geom_groups: tuple[int, ...] = (0, 1, 2)
-    drop_robot_pixels: bool = False
-
-    def __post_init__(self) -> None:
-        if self.sensor_model not in SENSOR_MODELS:
-            raise ValueError(f"sensor_model {self.sensor_model!r} is not one of {SENSOR_MODELS}")
-        if not self.voxel_m > 0:
-            raise ValueError(f"voxel_m must be positive metres, got {self.voxel_m}")
-        bad = [g for g in self.geom_groups if not 0 <= g < mujoco.mjNGROUP]
-        if bad:
-            raise ValueError(f"geom_groups {bad} outside 0..{mujoco.mjNGROUP - 1}")
-
-    @property
-    def tof_on(self) -> bool:
-        return "tof" in self.sensor_model
-
-    @property
-    def calibration_on(self) -> bool:
-        return "calibration" in self.sensor_model
-
-
-def load_perception_config(path: str | Path | None = "perception") -> PerceptionConfig:
-    """Load ``configs/perception.yaml`` (or another file); ``None`` gives the built-in defaults."""
-    return load_config(PerceptionConfig, path)
-
-
-# ---- results -----------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class CameraView:
-    """One camera's part of an observation.
-
-    For Rerun: log ``Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3])`` of
-    ``T_world_camera`` on the camera entity and ``Pinhole`` with ``camera_xyz=RDF`` (the optical
-    frame) and ``K`` with ``cx + 0.5, cy + 0.5`` (Rerun puts integer coordinates at pixel
-    corners), then ``DepthImage(depth_m, meter=1.0)``.
-
-    Attributes:
-        name: MuJoCo camera name.
-        K: (3, 3) intrinsics, pixel centres at integer coordinates (see :mod:`hsqbench.sim.camera`).
-        width_px, height_px: image size.
-        T_world_camera: (4, 4) *believed* (calibrated) pose of the optical frame (x right, y down,
-            z forward) in the world; the cloud was back-projected with it.
-        T_world_camera_true: (4, 4) the camera's true pose (equal to the above without a
-            calibration error); for diagnostics only.
-        depth_m: (H, W) float32 measured planar depth, metres, 0 = invalid (after sensor errors,
-            range gating and robot masking); 0 outside ``roi``.
-        roi: ``(v0, v1, u0, u1)``: rows ``v0:v1`` and columns ``u0:u1`` were processed (the image
-            rectangle of the crop box).
-        table_plane: (4,) plane ``(a, b, c, d)`` (unit normal up) the table was removed with.
-        n_valid_px: valid pixels in ``depth_m``.
-        n_cropped: this camera's points left after the crop, before downsampling.
-    """
-
-    name: str
-    K: Array
-    width_px: int
-    height_px: int
-    T_world_camera: Array
-    T_world_camera_true: Array
-    depth_m: NDArray[np.float32]
-    roi: tuple[int, int, int, int]
-    table_plane: Array
-    n_valid_px: int
-    n_cropped: int
-
-    @property
-    def position(self) -> Array:
-        """(3,) believed optical centre in the world, metres."""
-        return self.T_world_camera[:3, 3]
-
-
-@dataclass(frozen=True)
-class PerceptionTimings:
-    """Wall-clock seconds of one observation, by step: rendering the clean depth images,
-    sensor errors, back-projection with cropping, fusion with downsampling, and all of it."""
-
-    render_s: float
-    noise_s: float
-    cloud_s: float
-    downsample_s: float
-    total_s: float
-
-
-@dataclass(frozen=True)
-class PerceivedCloud:
-    """A fused, cropped, downsampled object cloud and how it was made.
-
-    Attributes:
-        points: (N, 3) float64 world points, metres (N may be 0: nothing on the table).
-        camera_index: (N,) int64 index into ``cameras`` of each point's main contributor.
-        cameras: one :class:`CameraView` per camera, in the order of the scene's cameras.
-        support_plane: (4,) the nominal table plane ``(a, b, c, d)``, unit normal up.
-        workspace_min, workspace_max: (3,) corners of the crop box, metres.
-        sensor_model: the sensor model that produced it.
-        voxel_m: downsampling voxel size, metres.
-        timings: wall-clock seconds by step.
-    """
-
-    points: Array
-    camera_index: NDArray[np.int64]
-    cameras: tuple[CameraView, ...]
-    support_plane: Array
-    workspace_min: Array
-    workspace_max: Array
-    sensor_model: str
-    voxel_m: float
-    timings: PerceptionTimings
-
-    @property
-    def camera_positions(self) -> Array:
-        """(C, 3) believed camera centres, metres (``PlanningContext.camera_positions``)."""
-        return np.array([c.position for c in self.cameras])
-
-
-# ---- cropping ----------------------------------------------------------------------------------
-
-
-def fit_plane(points: Array, up: Array) -> Array:
-    """Least-squares plane (4,) through (N, 3) points (smallest-variance direction of their
-    covariance), normal oriented along ``up``."""
-    centre = points.mean(axis=0)
-    q = points - centre
-    _, vecs = np.linalg.eigh(np.einsum("ni,nj->ij", q, q))
-    n = vecs[:, 0] if vecs[:, 0] @ up >= 0 else -vecs[:, 0]
-    return np.array([*n, -n @ centre])
-
-
-def refit_table_plane(points: Array, nominal: Array, crop: CropConfig) -> Array:
-    """The table plane as seen in ``points`` (one camera's points over the workspace).
-
-    Points within ``refit_band_m`` of the nominal plane are fitted, then refitted twice on the
-    points within ``refit_inlier_m`` of the previous fit (this drops the object points in the
-    band). Falls back to ``nominal`` when too few points support the fit or the fit tilts more
-    than ``refit_max_tilt_deg`` from it.
-    """
-    band = np.abs(points @ nominal[:3] + nominal[3]) < crop.refit_band_m
-    if band.sum() < crop.refit_min_points:
-        return nominal
-    sample = points[band]
-    plane = fit_plane(sample, nominal[:3])
-    for _ in range(2):
-        inliers = np.abs(sample @ plane[:3] + plane[3]) < crop.refit_inlier_m
-        if inliers.sum() < crop.refit_min_points:
-            return nominal
-        plane = fit_plane(sample[inliers], nominal[:3])
-    tilt = np.rad2deg(np.arccos(np.clip(plane[:3] @ nominal[:3], -1.0, 1.0)))
-    return plane if tilt <= crop.refit_max_tilt_deg else nominal
-
-
-def workspace_mask(points: Array, lo: Array, hi: Array, margin_m: float) -> NDArray[np.bool_]:
-    """Points inside the box ``[lo, hi]`` grown by ``margin_m`` on every side, without a bottom:
-    below the box is the table, removed by its plane (points just under the nominal table top
-    are needed to re-fit it)."""
-    inside = np.all(points[:, :2] >= lo[:2] - margin_m, axis=1)
-    return inside & np.all(points <= hi + margin_m, axis=1)
-
-
-def fuse_and_downsample(clouds: Sequence[Array], voxel_m: float) -> tuple[Array, NDArray[np.int64]]:
-    """Voxel centroids of the union of ``clouds`` and, per voxel, the index of the cloud that
-    contributed most of its points (ties go to the lower index)."""
-    counts = [len(c) for c in clouds]
-    if sum(counts) == 0:
-        return np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
-    points = np.concatenate([c for c in clouds if len(c)])
-    source = np.repeat(np.arange(len(clouds)), counts)
-    down = voxel_downsample(points, voxel_m)
-    per = np.bincount(
-        down.inverse * len(clouds) + source, minlength=len(down.points) * len(clouds)
-    ).reshape(len(down.points), len(clouds))
-    return down.points, np.argmax(per, axis=1).astype(np.int64)
 
 
 # ---- the sensor --------------------------------------------------------------------------------
@@ -357,12 +176,12 @@ class Perception:
         self._option.geomgroup[:] = 0
         self._option.geomgroup[list(self.config.geom_groups)] = 1
         self._option.sitegroup[:] = 0
-        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._renderers: dict[tuple[int, int], DepthRenderer] = {}
         try:
             for cam in self._cameras:
                 size = (cam.height_px, cam.width_px)
                 if size not in self._renderers:
-                    self._renderers[size] = mujoco.Renderer(model, *size)
+                    self._renderers[size] = DepthRenderer(model, *size)
         except Exception:
             self.close()
             raise
@@ -439,7 +258,7 @@ class Perception:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def _renderer(self, cam: _Camera) -> mujoco.Renderer:
+    def _renderer(self, cam: _Camera) -> DepthRenderer:
         if not self._renderers:
             raise RuntimeError("this Perception is closed; make a new one")
         return self._renderers[(cam.height_px, cam.width_px)]
@@ -451,13 +270,10 @@ class Perception:
         images = []
         for cam in self._cameras:
             renderer = self._renderer(cam)
-            renderer.update_scene(data, camera=cam.cam_id, scene_option=self._option)
-            renderer.enable_depth_rendering()
-            depth = renderer.render()
+            depth = renderer.depth(data, cam.cam_id, self._option)
             depth[(depth < cam.min_range_m) | (depth > cam.max_range_m)] = 0.0
             if self.config.drop_robot_pixels:
-                renderer.enable_segmentation_rendering()
-                seg = renderer.render()
+                seg = renderer.segmentation(data, cam.cam_id, self._option)
                 robot = (seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM) & np.isin(
                     seg[..., 0], self._robot_geoms
                 )

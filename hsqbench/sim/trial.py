@@ -63,7 +63,6 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.config import load_config
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.sim.ik import ArmIK, IKConfig, Pose
 from hsqbench.sim.judge import Box, JudgeConfig, SceneProbe
@@ -178,6 +177,9 @@ class TrialConfig:
         max_ranks: grasps tried in score order before an attempt is ``unreachable``.
         min_cloud_points: fewer perceived points than this: nothing to grasp.
         execution, ik, motion, judge, packed: see their classes.
+        overrides: dotted paths into the trial's config tree -> values (a sweep point's
+            settings; :mod:`hsqbench.overrides`): the parts' paths apply when a part is loaded,
+            the own fields' are already applied.
     """
 
     scene: str = "scene"
@@ -195,6 +197,7 @@ class TrialConfig:
     motion: MotionConfig = field(default_factory=MotionConfig)
     judge: JudgeConfig = field(default_factory=JudgeConfig)
     packed: PackedConfig = field(default_factory=PackedConfig)
+    overrides: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.max_ranks < 1:
@@ -202,8 +205,11 @@ class TrialConfig:
 
 
 def load_trial_config(path: str | Path | None = "trial") -> TrialConfig:
-    """Load ``configs/trial.yaml`` (or another file); ``None`` gives the built-in defaults."""
-    return load_config(TrialConfig, path)
+    """Load ``configs/trial.yaml`` (or another file, its ``overrides:`` applied); ``None`` gives
+    the built-in defaults."""
+    from hsqbench.overrides import load_trial_tree
+
+    return TrialConfig() if path is None else load_trial_tree(TrialConfig, path, {})
 
 
 # ---- environment -------------------------------------------------------------------------------
@@ -267,9 +273,8 @@ class TrialEnv:
         config: TrialConfig,
         recorder: Recorder | None = None,
     ) -> TrialEnv:
-        from hsqbench.sim.physics import load_physics_config
-        from hsqbench.sim.robot import load_robot_config
-        from hsqbench.sim.scene import build_scene, load_scene_config
+        from hsqbench.overrides import load_part
+        from hsqbench.sim.scene import build_scene
 
         if isinstance(objects, str) or (objects is not None and not isinstance(objects, Sequence)):
             objects = [objects]
@@ -278,9 +283,9 @@ class TrialEnv:
             kind,
             resolved,
             seed,
-            scene_config=load_scene_config(config.scene),
-            robot_config=load_robot_config(config.robot),
-            physics_config=load_physics_config(config.physics),
+            scene_config=load_part(config.scene, "scene", config.overrides),
+            robot_config=load_part(config.robot, "robot", config.overrides),
+            physics_config=load_part(config.physics, "physics", config.overrides),
         )
         if resolved is None:
             resolved = [resolve_object(n) for n in info.objects]
@@ -315,13 +320,14 @@ class TrialEnv:
                 self.info.table_top_z,
                 cfg.surface,
             )
-        from hsqbench.sim.perception import Perception, load_perception_config
+        from hsqbench.overrides import load_part
+        from hsqbench.sim.perception import Perception
 
         return Perception.from_scene(
             self.model,
             self.info,
             rng=self.rngs["perception_calibration"],
-            config=load_perception_config(cfg.perception),
+            config=load_part(cfg.perception, "perception", cfg.overrides),
         )
 
     def observe(self) -> Any:
