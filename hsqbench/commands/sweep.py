@@ -1,0 +1,188 @@
+"""``hsqbench sweep``: step config parameters over values and measure each planner at every point."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+HELP = (
+    "robustness sweeps: run a protocol at each value of config parameters (depth noise, "
+    "calibration, cameras, friction, ...) and plot GSR against the value per planner"
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "sweeps",
+        nargs="*",
+        metavar="SWEEP",
+        help="sweep configs: names in configs/sweeps/ (depth_noise, calibration, cameras, "
+        "pad_friction) or YAML paths; or use --param and --values",
+    )
+    parser.add_argument(
+        "--param", metavar="PATH", help="an ad hoc sweep: this config path, e.g. "
+        "perception.tof.sigma_quad_per_m, robot.pads.friction.0, scene.depth_cameras.names",
+    )  # fmt: skip
+    parser.add_argument(
+        "--values",
+        nargs="+",
+        metavar="VALUE",
+        help="with --param: its values, each read as YAML (0.002, true, [cam_left])",
+    )
+    parser.add_argument(
+        "--protocol",
+        nargs="+",
+        default=["paper"],
+        metavar="CONFIG",
+        help="with --param: the protocol(s) (default paper)",
+    )
+    parser.add_argument(
+        "--experiments",
+        nargs="+",
+        choices=("isolated", "packed"),
+        default=["isolated"],
+        help="with --param: the experiments (default isolated)",
+    )
+    parser.add_argument(
+        "--attempts-per-object",
+        type=int,
+        default=None,
+        metavar="N",
+        help="isolated attempts per object and seed at every point (overrides the sweep's)",
+    )
+    parser.add_argument("--planners", nargs="+", default=None, metavar="NAME", help="planners")
+    parser.add_argument(
+        "--seeds",
+        nargs="+",
+        type=int,
+        default=None,
+        metavar="SEED",
+        help="base seeds (overrides the sweep's; more seeds: more poses, narrower bands)",
+    )
+    parser.add_argument(
+        "--only", nargs="+", default=None, metavar="PARAM", help="run only these parameters"
+    )
+    parser.add_argument(
+        "--run",
+        default="sweeps",
+        metavar="NAME",
+        help="sweep folder under results/ or a path (default results/sweeps); rerunning resumes",
+    )
+    parser.add_argument("--jobs", type=int, default=None, help="worker processes")
+    parser.add_argument("--executor", choices=("local", "ray"), default="local")
+    parser.add_argument(
+        "--retry-errors", action="store_true", help="run again trials recorded as errors"
+    )
+    parser.add_argument(
+        "--report-only",
+        action="store_true",
+        help="only rewrite sweep.csv and the plots from the runs already in the folder",
+    )
+
+
+def _sweeps(args: argparse.Namespace) -> list:
+    import yaml
+
+    from hsqbench.cli import CommandError
+    from hsqbench.experiment.sweep_config import (
+        SweepConfig,
+        SweepParameter,
+        SweepProtocol,
+        load_sweep_config,
+    )
+
+    if bool(args.param) != bool(args.values):
+        raise CommandError("--param and --values go together")
+    if args.param and args.sweeps:
+        raise CommandError("give sweep configs or --param/--values, not both")
+    if not args.param and not args.sweeps:
+        raise CommandError("name a sweep (e.g. depth_noise) or give --param PATH --values ...")
+    if args.param:
+        values = tuple(yaml.safe_load(v) for v in args.values)
+        name = args.param.replace(".", "_")
+        sweeps = [
+            SweepConfig(
+                protocols=tuple(SweepProtocol(p) for p in args.protocol),
+                parameters=(SweepParameter(name=name, path=args.param, values=values),),
+                experiments=tuple(args.experiments),
+            )
+        ]
+    else:
+        sweeps = [load_sweep_config(s) for s in args.sweeps]
+    out = []
+    for sweep in sweeps:
+        changes = {}
+        if args.seeds is not None:
+            changes["seeds"] = tuple(args.seeds)
+        if args.planners is not None:
+            changes["planners"] = tuple(args.planners)
+        if args.attempts_per_object is not None:
+            changes["protocols"] = tuple(
+                SweepProtocol(p.config, args.attempts_per_object, p.rounds) for p in sweep.protocols
+            )
+        if changes:
+            from dataclasses import replace
+
+            sweep = replace(sweep, **changes)
+        out.append(sweep)
+    return out
+
+
+def _available(sweep):
+    """The sweep without optional planners whose extra is not installed (said on stderr)."""
+    from dataclasses import replace
+
+    from hsqbench.planner.registry import unavailable
+
+    keep = []
+    for p in sweep.planners:
+        why = unavailable(p)
+        if why is None:
+            keep.append(p)
+        else:
+            print(f"leaving out planner {p}: {why}", file=sys.stderr)
+    return replace(sweep, planners=tuple(keep))
+
+
+def run(args: argparse.Namespace) -> int:
+    from hsqbench.cli import CommandError
+    from hsqbench.experiment.backend import TrialRunnerUnavailable
+    from hsqbench.experiment.executor import make_executor
+    from hsqbench.experiment.sweep import run_sweep, write_sweep_report
+    from hsqbench.settings import RESULTS_DIR
+
+    root = Path(args.run) if "/" in args.run else RESULTS_DIR / args.run
+    if args.report_only:
+        written = write_sweep_report(root)
+        print(f"sweep report: {written[0]} (+{len(written) - 1} plots)")
+        return 0
+    sweeps = [_available(s) for s in _sweeps(args)]
+    executor = make_executor(args.executor, args.jobs)
+    errors = 0
+    try:
+        for sweep in sweeps:
+            summary = run_sweep(
+                sweep,
+                root,
+                executor=executor,
+                only=args.only,
+                retry_errors=args.retry_errors,
+            )
+            errors += summary.errors
+    except TrialRunnerUnavailable as exc:
+        raise CommandError(f"cannot run the sweep: {exc}") from exc
+    except KeyboardInterrupt:
+        print(
+            f"\ninterrupted: finished trials are saved under {root}; the same command resumes",
+            file=sys.stderr,
+        )
+        return 130
+    print(f"sweep: {root / 'sweep.csv'} and one PNG per parameter in {root}")
+    if errors:
+        print(
+            f"{errors} trial(s) failed with an infrastructure error; rerun with --retry-errors",
+            file=sys.stderr,
+        )
+        return 1
+    return 0

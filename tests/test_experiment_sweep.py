@@ -1,0 +1,168 @@
+"""Sweeps (hsqbench.experiment.sweep*): each point an ordinary resumable run, the CSV's rates
+and intervals, one plot per parameter, and the sweep config's checks. The fake backend stands in
+for the simulation: its success probability is the point's setting."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import pandas as pd
+import pytest
+
+from hsqbench.config import ConfigError
+from hsqbench.experiment.fake_backend import FakeBackend
+from hsqbench.experiment.results import load_results
+from hsqbench.experiment.stats import Rate
+from hsqbench.experiment.sweep import CSV_FILE, SWEEP_FILE, point_config, run_sweep
+from hsqbench.experiment.sweep_config import (
+    SweepConfig,
+    SweepParameter,
+    SweepPoint,
+    SweepProtocol,
+    load_sweep_config,
+)
+
+PROTOCOL = """
+planners: [a, b]
+seeds: [0]
+isolated: {objects: [mug, bowl, apple], attempts_per_object: 10}
+packed: {objects: [mug, bowl, apple], rounds: 3, objects_per_round: 2}
+"""
+
+
+def fake(trial_config: str, overrides: dict) -> FakeBackend:
+    p = overrides.get("p", 0.8)
+    return FakeBackend(success={"a": p, "b": p / 2})
+
+
+@pytest.fixture
+def sweep(tmp_path) -> SweepConfig:
+    path = tmp_path / "proto.yaml"
+    path.write_text(PROTOCOL)
+    return SweepConfig(
+        protocols=(SweepProtocol(str(path), attempts_per_object=4),),
+        planners=("a", "b"),
+        seeds=(0, 1),
+        parameters=(
+            SweepParameter(name="p", path="p", values=(0.2, 0.8)),
+            SweepParameter(
+                name="q",
+                points=(SweepPoint("default", {}), SweepPoint("low", {"p": 0.1})),
+            ),
+        ),
+    )
+
+
+def test_points_are_runs_the_csv_holds_each_rate_and_a_plot_per_parameter(tmp_path, sweep):
+    root = tmp_path / "sw"
+    summary = run_sweep(sweep, root, backend_factory=fake, progress=False)
+    # p=0.2, p=0.8, the default ({}), p=0.1: four distinct settings, four runs
+    assert len(summary.runs) == 4
+    assert all(s.ran == s.selected == 2 * 2 * 3 * 4 for s in summary.runs.values())
+    table = pd.read_csv(root / CSV_FILE)
+    assert set(table["parameter"]) == {"p", "q"}
+    assert len(table) == 2 * 2 * 2  # parameters x points x planners (isolated only)
+    meta = json.loads((root / SWEEP_FILE).read_text())
+    for _, row in table.iterrows():
+        run = root / row["run"]
+        rows = [
+            r
+            for r in load_results(run).attempts
+            if r["planner"] == row["planner"] and r["experiment"] == "isolated"
+        ]
+        k = sum(r["success"] == "1" for r in rows)
+        assert (row["n"], row["successes"]) == (len(rows), k) == (24, k)
+        rate = Rate.of(k, len(rows))
+        assert row["gsr_percent"] == pytest.approx(100 * rate.value, rel=1e-3)
+        assert row["gsr_ci_low_percent"] == pytest.approx(100 * rate.low, rel=1e-3)
+        assert row["gsr_ci_high_percent"] == pytest.approx(100 * rate.high, rel=1e-3)
+        point = meta["parameters"][row["parameter"]]["points"][row["point"]]
+        assert json.loads(row["overrides"]) == point["overrides"]
+        assert json.loads((run / "run.json").read_text())["backend"]["success"]["a"] == (
+            point["overrides"].get("p", 0.8)
+        )
+    # the setting shows in the rates: planner a at p=0.8 beats p=0.2
+    a = table[(table["parameter"] == "p") & (table["planner"] == "a")].set_index("label")
+    assert a.loc["0.8", "gsr_percent"] > a.loc["0.2", "gsr_percent"]
+    for name in ("p", "q"):
+        assert (root / f"{name}.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_rerunning_resumes_every_point_and_new_seeds_get_new_runs(tmp_path, sweep):
+    root = tmp_path / "sw"
+    first = run_sweep(sweep, root, backend_factory=fake, progress=False)
+    again = run_sweep(sweep, root, backend_factory=fake, progress=False)
+    assert set(again.runs) == set(first.runs)
+    assert all(s.ran == 0 and s.skipped == s.selected for s in again.runs.values())
+    more = run_sweep(replace(sweep, seeds=(0, 1, 2)), root, backend_factory=fake, progress=False)
+    assert not set(more.runs) & set(first.runs)  # other sizes never resume into old runs
+
+
+def test_packed_rows_carry_the_clearance_rate(tmp_path, sweep):
+    packed = replace(sweep, experiments=("packed",), parameters=sweep.parameters[:1])
+    run_sweep(packed, tmp_path / "sw", backend_factory=fake, progress=False)
+    table = pd.read_csv(tmp_path / "sw" / CSV_FILE)
+    assert set(table["experiment"]) == {"packed"}
+    row = table.iloc[0]
+    assert row["objects_presented"] == 2 * 3 * 2  # seeds x rounds x objects per round
+    rate = Rate.of(int(row["objects_cleared"]), int(row["objects_presented"]))
+    assert row["cr_percent"] == pytest.approx(100 * rate.value, rel=1e-3)
+
+
+def test_point_config_sizes_the_protocol_and_keeps_only_the_sweeps_experiments(sweep):
+    config = point_config(sweep.protocols[0], sweep)
+    assert config.isolated.attempts_per_object == 4 and config.isolated.enabled
+    assert not config.packed.enabled and config.seeds == (0, 1)
+    assert config.isolated.objects == ("mug", "bowl", "apple")
+
+
+def test_sweep_config_errors_name_the_problem():
+    with pytest.raises(ConfigError, match="either path with values, or points"):
+        SweepParameter(name="x", path="a.b", values=(1,), points=(SweepPoint("p", {}),))
+    with pytest.raises(ConfigError, match="labels repeat"):
+        SweepParameter(name="x", points=(SweepPoint("p", {}), SweepPoint("p", {"a": 1})))
+    with pytest.raises(ConfigError, match="on every point or on none"):
+        SweepParameter(name="x", points=(SweepPoint("p", {}, 1.0), SweepPoint("q", {"a": 1})))
+    with pytest.raises(ConfigError, match="letters, digits"):
+        SweepParameter(name="a/b", path="a", values=(1,))
+    values = SweepParameter(name="x", path="a.b", values=(0.5, 1))
+    assert [(p.label, p.x, p.overrides) for p in values.points] == [
+        ("0.5", 0.5, {"a.b": 0.5}),
+        ("1", 1.0, {"a.b": 1}),
+    ]
+    cams = SweepParameter(name="c", path="c", values=(["l"], ["l", "r"]))
+    assert cams.categorical and [p.label for p in cams.points] == ["l", "l+r"]
+
+
+@pytest.mark.parametrize("name", ["depth_noise", "calibration", "cameras", "pad_friction"])
+def test_built_in_sweeps_load_and_every_point_is_a_valid_trial_config(name):
+    from hsqbench.overrides import load_trial_tree
+    from hsqbench.sim.trial import TrialConfig
+
+    sweep = load_sweep_config(name)
+    assert [p.config for p in sweep.protocols] == ["paper", "ycb"]
+    for proto in sweep.protocols:
+        config = point_config(proto, sweep)
+        for point in sweep.parameters[0].points:
+            load_trial_tree(TrialConfig, config.trial_config, point.overrides)
+    assert any(not p.overrides for p in sweep.parameters[0].points)  # today's setting is a point
+
+
+def test_cli_builds_an_ad_hoc_sweep_with_yaml_values():
+    from hsqbench.cli import CommandError, build_parser
+    from hsqbench.commands.sweep import _sweeps
+
+    args = build_parser().parse_args(
+        ["sweep", "--param", "scene.depth_cameras.names", "--values", "[cam_left]", "[cam_right]"]
+    )
+    (sweep,) = _sweeps(args)
+    assert [p.overrides for p in sweep.parameters[0].points] == [
+        {"scene.depth_cameras.names": ["cam_left"]},
+        {"scene.depth_cameras.names": ["cam_right"]},
+    ]
+    args = build_parser().parse_args(["sweep", "cameras", "--seeds", "3", "4"])
+    (sweep,) = _sweeps(args)
+    assert sweep.seeds == (3, 4) and sweep.parameters[0].name == "cameras"
+    with pytest.raises(CommandError, match="go together"):
+        _sweeps(build_parser().parse_args(["sweep", "--param", "a.b"]))
