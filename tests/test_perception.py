@@ -342,3 +342,37 @@ def test_benchmark_scene_box_is_perceived_without_table_or_robot():
     assert d.max() < 0.002  # no table, no robot, nothing but the box
     assert set(np.unique(obs.camera_index)) == {0, 1}
     assert obs.camera_positions.shape == (2, 3)
+
+
+@pytest.mark.parametrize("camera", ["cam_left", "cam_right"])
+def test_single_camera_mode_perceives_with_that_camera_only_and_the_planners_still_plan(camera):
+    from hsqbench.overrides import load_part
+    from hsqbench.planner.api import PlanningContext
+    from hsqbench.planner.registry import get_planner
+    from hsqbench.sim.scene import build_scene
+
+    scene = load_part("scene", "scene", {"scene.depth_cameras.names": [camera]})
+    model, data, info = build_scene("isolated", "proc_box", seed=1, scene_config=scene)
+    assert info.camera_names == (camera,)
+    with Perception.from_scene(model, info, rng=np.random.default_rng(0)) as perception:
+        obs = perception.observe(data, np.random.default_rng(0))
+    assert [c.name for c in obs.cameras] == [camera]
+    assert obs.camera_positions.shape == (1, 3)
+    true_pos = data.cam_xpos[model.camera(camera).id]
+    assert np.linalg.norm(obs.camera_positions[0] - true_pos) < 0.01  # calibration error only
+    assert len(obs.points) > 300 and set(np.unique(obs.camera_index)) == {0}
+    # one side of the box only: its far side (seen by the other camera) is missing
+    both_model, both_data, both_info = build_scene("isolated", "proc_box", seed=1)
+    with Perception.from_scene(both_model, both_info, rng=np.random.default_rng(0)) as both:
+        full = both.observe(both_data, np.random.default_rng(0))
+    assert len(obs.points) < 0.8 * len(full.points)
+    context = PlanningContext(
+        support_plane=tuple(obs.support_plane),
+        camera_positions=obs.camera_positions,
+        workspace_bounds=(obs.workspace_min, obs.workspace_max),
+    )
+    # the paper's method completes the hidden side; the antipodal baseline may find no pair of
+    # seen contacts on one view of a box, and must say so rather than fail
+    assert len(get_planner("hsq").plan(obs.points, context).grasps) > 0
+    antipodal = get_planner("antipodal").plan(obs.points, context)
+    assert len(antipodal.grasps) > 0 or antipodal.reason
