@@ -79,3 +79,20 @@ def test_overrides_enter_the_fingerprint_and_are_picklable():
     assert plain["configs"]["perception"]["tof"]["sigma_quad_per_m"] == 0.001
     again = pickle.loads(pickle.dumps(backend))
     assert again.fingerprint() == printed
+
+
+def test_object_mass_scale_scales_mass_and_inertia_of_the_objects_only():
+    from hsqbench.sim.scene import build_scene
+
+    def body(scale):
+        physics = load_part("physics", "physics", {"physics.object_mass_scale": scale})
+        model, _, info = build_scene("isolated", "proc_box", seed=0, physics_config=physics)
+        b = info.object_body_ids["proc_box"]
+        return model.body_mass[b], model.body_inertia[b].copy(), model.body_mass.sum()
+
+    m1, i1, total1 = body(1.0)
+    m2, i2, total2 = body(2.5)
+    assert m2 == pytest.approx(2.5 * m1) and i2 == pytest.approx(2.5 * i1)
+    assert total2 - total1 == pytest.approx(1.5 * m1)  # nothing else got heavier
+    with pytest.raises(ConfigError, match="object_mass_scale must be positive"):
+        load_part("physics", "physics", {"physics.object_mass_scale": 0.0})

@@ -78,12 +78,14 @@ def add_object_body(
     pos: np.ndarray,
     quat: np.ndarray,
     contact: ContactConfig,
+    mass_scale: float = 1.0,
 ) -> mujoco.MjsBody:
     """Add ``obj`` as a free body named ``body_name`` at (pos, quat) under ``parent``.
 
     Collision geoms are the convex hulls (``contype = conaffinity = 1``, group 3) with the
     ``contact`` parameters; the visual mesh is a non-colliding group-2 geom with the texture
     when there is one. Asset names are prefixed with ``body_name`` so objects never clash.
+    ``mass_scale`` multiplies the mass and the inertia (the same shape, denser or lighter).
     """
     if obj.mass_kg <= 0 or not np.isfinite(obj.mass_kg):
         raise ValueError(f"{obj.name}: mass must be positive, got {obj.mass_kg}")
@@ -93,9 +95,10 @@ def add_object_body(
     body = parent.add_body(name=body_name, pos=list(map(float, pos)), quat=list(map(float, quat)))
     body.add_freejoint(name=f"{body_name}/free")
     body.explicitinertial = True
-    body.mass = float(obj.mass_kg)
+    # A mass scale keeps the density distribution: the inertia scales with the mass.
+    body.mass = float(obj.mass_kg) * mass_scale
     body.ipos = list(map(float, obj.com))
-    body.inertia = list(map(float, moments))
+    body.inertia = list(map(float, moments * mass_scale))
     body.iquat = list(map(float, iquat))
     for i, path in enumerate(obj.collision_meshes):
         mesh_name = f"{body_name}/hull{i}"

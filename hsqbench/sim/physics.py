@@ -66,6 +66,8 @@ class PhysicsConfig:
         table: contact parameters of the table top and the bin.
         settle_time_s: simulated time given to a new scene to come to rest.
         settle_speed_mps: largest body speed (m/s, and rad/s for spins) that counts as at rest.
+        object_mass_scale: every object's mass and inertia times this (1: the library's
+            masses); for sweeps of how heavy the objects are.
     """
 
     timestep_s: float = 0.002
@@ -80,12 +82,15 @@ class PhysicsConfig:
     table: ContactConfig = field(default_factory=ContactConfig)
     settle_time_s: float = 1.0
     settle_speed_mps: float = 0.005
+    object_mass_scale: float = 1.0
 
     def __post_init__(self) -> None:
         if self.timestep_s <= 0:
             raise ValueError(f"timestep_s must be positive, got {self.timestep_s}")
         if self.impratio < 1:
             raise ValueError(f"impratio must be >= 1, got {self.impratio}")
+        if not self.object_mass_scale > 0:
+            raise ValueError(f"object_mass_scale must be positive, got {self.object_mass_scale}")
 
 
 _INTEGRATORS = {

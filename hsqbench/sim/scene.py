@@ -562,6 +562,7 @@ def compose_scene(
             np.array([xy[0], xy[1], height]),
             quat,
             physics.objects,
+            mass_scale=physics.object_mass_scale,
         )
     return spec
 
