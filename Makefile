@@ -12,12 +12,13 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: help install learned test test-slow lint format bench benchmark assets clean
+.PHONY: help install learned test test-slow lint format bench benchmark sweeps assets clean
 
 help:
 	@echo "make benchmark   run both experiments of the paper and write results/<run>/ (CONFIG=quick ...)"
 	@echo "make test        run the test suite (fast checks, as CI does)"
 	@echo "make test-slow   run the slow checks too (every object of the library, long fits)"
+	@echo "make sweeps      robustness sweeps: depth noise, calibration, one camera, pad friction (results/sweeps/)"
 	@echo "make bench       time the planner and the trial loop (bench/)"
 	@echo "make assets      build the whole object library (optional: benchmark builds what it needs)"
 	@echo "make learned     install the contact-graspnet planner (torch, cgn-pytorch, torch-cluster)"
@@ -87,6 +88,18 @@ benchmark: $(STAMP)
 	$(PY) -m hsqbench.cli benchmark --config $(CONFIG) --run $(RUN) --jobs $(JOBS) --resume
 	@rm -rf results/latest && cp -r results/$(RUN) results/latest && rm -f results/latest/.lock
 	@echo "tables: results/latest/tables.md (copied from results/$(RUN))"
+
+# The built-in robustness sweeps (configs/sweeps/) on the isolated protocol, paper and unseen
+# objects, into results/sweeps/ (sweep.csv, one PNG per parameter, a run per point). Each is
+# about 25 min with JOBS=2 for hsq, single-sq and antipodal (contact-graspnet, where installed,
+# adds about 15 min per sweep; SWEEP_PLANNERS="hsq single-sq antipodal" leaves it out). Rerunning
+# resumes; SWEEP_ARGS="--seeds 0 1 2" scales them up (new runs, narrower bands).
+SWEEPS ?= depth_noise calibration cameras pad_friction
+SWEEP_PLANNERS ?=
+SWEEP_ARGS ?=
+sweeps: $(STAMP)
+	$(PY) -m hsqbench.cli sweep $(SWEEPS) --run sweeps --jobs $(JOBS) \
+		$(if $(SWEEP_PLANNERS),--planners $(SWEEP_PLANNERS)) $(SWEEP_ARGS)
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache

@@ -166,3 +166,14 @@ def test_cli_builds_an_ad_hoc_sweep_with_yaml_values():
     assert sweep.seeds == (3, 4) and sweep.parameters[0].name == "cameras"
     with pytest.raises(CommandError, match="go together"):
         _sweeps(build_parser().parse_args(["sweep", "--param", "a.b"]))
+
+
+def test_a_bad_override_fails_before_anything_is_written(tmp_path, sweep):
+    bad = replace(
+        sweep, parameters=(SweepParameter(name="x", path="perception.tof.sigma", values=(1.0,)),)
+    )
+    with pytest.raises(ConfigError, match=r"'sigma' is not a key of tof.*sigma_quad_per_m"):
+        run_sweep(bad, tmp_path / "sw", progress=False)  # the simulation backend checks it
+    assert not (tmp_path / "sw").exists()
+    with pytest.raises(ConfigError, match=r"no sweep 'nosuch'.*depth_noise"):
+        load_sweep_config("nosuch")

@@ -180,6 +180,16 @@ def run_sweep(
         for i, point in enumerate(param.points)
         for proto in sweep.protocols
     }
+    backends = {}
+    for param in params:
+        for i, point in enumerate(param.points):
+            for proto in sweep.protocols:
+                run_dir = dirs[param.name, i, proto.name]
+                if run_dir not in backends:
+                    trial_config = configs[proto.name].trial_config
+                    backends[run_dir] = backend_factory(trial_config, point.overrides)
+                    # a bad path or planner fails here, before anything is written
+                    backends[run_dir].check(tuple(planners or sweep.planners))
     root.mkdir(parents=True, exist_ok=True)
     _record(root, sweep, params, dirs)
     todo = list(dict.fromkeys(dirs.values()))
@@ -193,16 +203,22 @@ def run_sweep(
                     continue
                 if progress:
                     done = len(summary.runs)
+                    spent = time.perf_counter() - start
+                    ran = sum(s.ran for s in summary.runs.values())
+                    # Runs of a sweep differ in size by protocol only: a rough estimate.
+                    left = (
+                        f", about {_elapsed(spent / done * (len(todo) - done))} left" if ran else ""
+                    )
                     print(
                         f"sweep [{done + 1}/{len(todo)}] {param.name} = {point.label} on "
-                        f"{proto.name} ({_elapsed(time.perf_counter() - start)} so far): {run_dir}",
+                        f"{proto.name} ({_elapsed(spent)} so far{left}): {run_dir}",
                         file=sys.stderr,
                     )
                 config = configs[proto.name]
                 summary.runs[run_dir] = run_benchmark(
                     config,
                     run_dir,
-                    backend=backend_factory(config.trial_config, point.overrides),
+                    backend=backends[run_dir],
                     executor=executor,
                     planners=planners,
                     experiments=sweep.experiments,

@@ -158,5 +158,10 @@ def load_sweep_config(name_or_path: str | Path) -> SweepConfig:
     """``configs/sweeps/<name>.yaml`` (``depth_noise``), a name under ``configs/`` or a path."""
     path = Path(name_or_path)
     if not path.suffix and "/" not in str(name_or_path):
+        from hsqbench.settings import CONFIG_DIR
+
+        if not (CONFIG_DIR / "sweeps" / f"{name_or_path}.yaml").exists():
+            known = sorted(p.stem for p in (CONFIG_DIR / "sweeps").glob("*.yaml"))
+            raise ConfigError(f"no sweep {name_or_path!r} in configs/sweeps/; known: {known}")
         name_or_path = f"sweeps/{name_or_path}"
     return load_config(SweepConfig, name_or_path)

@@ -1,9 +1,10 @@
-"""Perception: the fused object cloud from the scene's two depth cameras.
+"""Perception: the fused object cloud from the scene's depth cameras (two; one in the
+single-camera mode, ``scene.depth_cameras.names: [cam_left]``).
 
 One observation (:meth:`Perception.observe`):
 
-1. **Render** each camera's planar depth offscreen (``mujoco.Renderer`` with depth rendering;
-   ``MUJOCO_GL=egl`` headless). Only the configured geom groups are drawn (visual geometry, not
+1. **Render** each camera's planar depth offscreen (:mod:`hsqbench.sim.depth_renderer`: one GL
+   context per process, ``MUJOCO_GL=egl`` headless). Only the configured geom groups are drawn (visual geometry, not
    the collision hulls) and no sites. Depth outside the camera's operating range is invalid (0).
 2. **Sensor errors** (``sensor_model`` in ``configs/perception.yaml``): ``none``; ``tof``
    (range noise, flying pixels, dropout; :mod:`hsqbench.sim.sensor_noise`); ``calibration`` (a
@@ -28,6 +29,9 @@ removes pixels showing robot geoms (simulator ground truth, so off by default).
 All randomness comes from the generators passed in: the calibration errors from the one given to
 :class:`Perception` (drawn even when the model is off, so the noise stream does not depend on
 it), the depth noise from the one given to :meth:`Perception.observe`.
+
+Settings: :mod:`hsqbench.sim.perception_config`; results: :mod:`hsqbench.sim.perceived`; crop and
+fusion: :mod:`hsqbench.sim.table_crop`.
 
 Use (one :class:`Perception` per compiled scene; renderers are reused across observations)::
 
