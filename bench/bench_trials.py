@@ -1,5 +1,5 @@
 """Trial throughput: isolated trials per second in one process (``--jobs 1``), and what making
-the depth sensor costs per trial.
+a trial's depth renderer costs, with a GL context of its own and with the process's one.
 
 A fixed set (objects x seeds, the paper's planner) runs after one warm-up trial (imports, the IK
 seed library, the first GL context), so the number is the steady rate a worker reaches; a sweep
@@ -24,20 +24,27 @@ import numpy as np  # noqa: E402
 OBJECTS = ["tomato_soup_can", "foam_brick", "mustard_bottle", "sugar_box"]
 
 
-def sensor_cost(obj: str, repeats: int) -> float:
-    """Median seconds to make (and close) the trial's depth sensor for one built scene."""
-    from hsqbench.sim.perception import Perception
+def renderer_cost(objects: list[str], repeats: int) -> tuple[float, float]:
+    """Median seconds to make and free the renderer of one built scene (one image size, as the
+    two cameras share it): a fresh ``mujoco.Renderer`` (its own GL context: the code before
+    issue 17) and a :class:`DepthRenderer` (the process's GL context), alternating."""
+    import mujoco
+
+    from hsqbench.sim.depth_renderer import DepthRenderer
     from hsqbench.sim.scene import build_scene
 
-    model, _, info = build_scene("isolated", obj, seed=0)
-    times = []
-    for i in range(repeats + 1):
-        t0 = time.perf_counter()
-        with Perception.from_scene(model, info, rng=np.random.default_rng(i)):
-            pass
-        if i:  # the first pays for the process's GL context
-            times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+    fresh, reused = [], []
+    for obj in objects:
+        model, _, info = build_scene("isolated", obj, seed=0)
+        cam = info.depth_cameras[0]
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            mujoco.Renderer(model, cam.height_px, cam.width_px).close()
+            t1 = time.perf_counter()
+            DepthRenderer(model, cam.height_px, cam.width_px).close()
+            fresh.append(t1 - t0)
+            reused.append(time.perf_counter() - t1)
+    return float(np.median(fresh)), float(np.median(reused))
 
 
 def main() -> None:
@@ -66,7 +73,11 @@ def main() -> None:
         f"  throughput: {n / total:.3f} trials/s ({total:.1f} s; median {np.median(walls):.2f} s)"
     )
     print(f"  outcomes: {sorted(outcomes)}")
-    print(f"  making the depth sensor: {1000 * sensor_cost(args.objects[0], 5):.0f} ms per trial")
+    fresh, reused = renderer_cost(args.objects, 4)
+    print(
+        f"  making a trial's renderer: {1000 * fresh:.0f} ms with its own GL context "
+        f"(mujoco.Renderer), {1000 * reused:.0f} ms with the process's (DepthRenderer)"
+    )
 
 
 if __name__ == "__main__":
