@@ -187,10 +187,15 @@ def load_trial_tree(cls: type[T], name_or_path: str | Path, overrides: Mapping[s
     path = resolve_config_path(name_or_path)
     data = load_config_data(path)
     given = {**data.pop("overrides", {}), **dict(overrides)}
+    if not given:
+        return from_dict(cls, data, where=path.name)
+    if "overrides" not in {f.name for f in dataclasses.fields(cls)}:
+        raise ConfigError(f"{cls.__name__} has no 'overrides' field: it cannot take {given}")
     own, _ = split_overrides(given)
     data = apply_overrides(data, own, cls)
     data["overrides"] = given
     config = from_dict(cls, data, where=path.name)
     for part in TRIAL_PARTS:
-        load_part(getattr(config, part), part, given)
+        if isinstance(getattr(config, part, None), str):
+            load_part(getattr(config, part), part, given)
     return config
