@@ -83,7 +83,7 @@ def test_points_are_runs_the_csv_holds_each_rate_and_a_plot_per_parameter(tmp_pa
             point["overrides"].get("p", 0.8)
         )
     # the setting shows in the rates: planner a at p=0.8 beats p=0.2
-    a = table[(table["parameter"] == "p") & (table["planner"] == "a")].set_index("label")
+    a = table[(table["parameter"] == "p") & (table["planner"] == "a")].set_index("value")
     assert a.loc["0.8", "gsr_percent"] > a.loc["0.2", "gsr_percent"]
     for name in ("p", "q"):
         assert (root / f"{name}.png").read_bytes()[:4] == b"\x89PNG"

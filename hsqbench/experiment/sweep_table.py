@@ -1,5 +1,6 @@
 """The table of a sweep (``sweep.csv``): a rate with its Wilson interval per protocol,
-experiment, parameter, point and planner, read from the points' run folders.
+experiment, parameter, point and planner, read from the points' run folders. ``value`` is the
+point's label, ``x`` its position on the plot (empty for categories such as the cameras).
 
 Isolated: GSR (successful attempts / attempts). Packed: GSR over all attempts of the rounds, and
 CR (objects cleared / objects presented). Error rows (infrastructure failures) are counted in
@@ -22,7 +23,7 @@ COLUMNS = (
     "experiment",
     "parameter",
     "point",
-    "label",
+    "value",
     "x",
     "overrides",
     "planner",
@@ -103,7 +104,7 @@ def sweep_table(root: Path, meta: dict[str, Any]) -> pd.DataFrame:
                             "protocol": protocol,
                             "parameter": name,
                             "point": i,
-                            "label": point["label"],
+                            "value": point["label"],
                             "x": point["x"],
                             "overrides": json.dumps(point["overrides"], sort_keys=True),
                             "run": rel,
