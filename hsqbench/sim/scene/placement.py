@@ -110,6 +110,8 @@ def draw_object_names(kind: str, n_objects: int, rng: np.random.Generator) -> li
 
 def scene_object_count(kind: str, cfg: SceneConfig) -> int:
     """How many objects a scene of ``kind`` draws when none are given."""
+    if kind not in KINDS:
+        raise ValueError(f"unknown scene kind {kind!r}; known: {list(KINDS)}")
     return {"isolated": 1, "packed": cfg.placement.n_packed, "pile": cfg.pile.n_objects}[kind]
 
 
