@@ -151,12 +151,32 @@ def test_scene_command_builds_a_pile(tmp_path, capsys) -> None:
 
     from hsqbench.cli import main
 
-    out = tmp_path / "pile.png"
-    code = main(["scene", "--kind", "pile", "--objects", *OBJECTS[:3], "--png", str(out)])
-    assert code == 0
+    out, xml = tmp_path / "pile.png", tmp_path / "mjcf"
+    args = [
+        "scene",
+        "--kind",
+        "pile",
+        "--objects",
+        *OBJECTS[:3],
+        "--png",
+        str(out),
+        "--xml",
+        str(xml),
+    ]
+    assert main(args) == 0
     text = capsys.readouterr().out
     assert text.startswith("pile scene, seed 0: proc_box, proc_cylinder, proc_l")
     image = np.asarray(Image.open(out).convert("RGB"), dtype=float)
     assert image.std() > 10.0
-    robot = load_robot_config()
-    assert robot.prefix  # the scene in the picture is the ordinary one, with the robot
+    # The exported scene is the ordinary one: the objects at their settled poses, no walls.
+    model = mujoco.MjModel.from_xml_path(str(xml / "scene.xml"))
+    names = [model.geom(i).name for i in range(model.ngeom)]
+    assert not any(n.startswith(pile_module.WALL_PREFIX) for n in names)
+    _, _, info = build_scene("pile", OBJECTS[:3], seed=0)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("initial").id)
+    mujoco.mj_forward(model, data)
+    for name in OBJECTS[:3]:
+        b = model.body(f"obj/{name}").id
+        # MJCF writes 6 significant digits.
+        np.testing.assert_allclose(data.xpos[b], info.initial_poses[name][:3], atol=1e-6)
