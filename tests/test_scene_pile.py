@@ -17,6 +17,7 @@ from hsqbench.sim.scene import (
     hull_vertices,
     load_scene_config,
     pile_placeable,
+    pile_scene,
 )
 from hsqbench.sim.scene import pile as pile_module
 
@@ -31,9 +32,9 @@ OBJECTS = ["proc_box", "proc_cylinder", "proc_l", "proc_mug"]
 
 @pytest.fixture(autouse=True)
 def _fresh_cache():
-    pile_module._CACHE.clear()
+    pile_scene._CACHE.clear()
     yield
-    pile_module._CACHE.clear()
+    pile_scene._CACHE.clear()
 
 
 def _vertices(model, data, info, name):
@@ -55,7 +56,7 @@ def _touching_pairs(model, data, info) -> set[tuple[int, int]]:
 
 def test_pile_is_deterministic_per_seed() -> None:
     _, _, a = build_scene("pile", OBJECTS, seed=3)
-    pile_module._CACHE.clear()  # a real second drop, not the remembered one
+    pile_scene._CACHE.clear()  # a real second drop, not the remembered one
     _, _, b = build_scene("pile", OBJECTS, seed=3)
     _, _, c = build_scene("pile", OBJECTS, seed=4)
     for name in OBJECTS:
@@ -91,7 +92,7 @@ def test_pile_objects_rest_on_the_table_inside_the_workspace_and_heap() -> None:
 
 def test_a_rejected_drop_is_redrawn_from_the_same_generator_and_recorded(monkeypatch) -> None:
     _, _, first = build_scene("pile", OBJECTS, seed=7)
-    pile_module._CACHE.clear()
+    pile_scene._CACHE.clear()
     real = pile_module._problem
     calls = []
 
@@ -180,3 +181,18 @@ def test_scene_command_builds_a_pile(tmp_path, capsys) -> None:
         b = model.body(f"obj/{name}").id
         # MJCF writes 6 significant digits.
         np.testing.assert_allclose(data.xpos[b], info.initial_poses[name][:3], atol=1e-6)
+
+
+def test_the_pile_is_checked_again_in_the_final_scene_with_the_robot(monkeypatch) -> None:
+    """A drop that rests in the drop model but not in the scene with the robot is redrawn too."""
+    real = pile_scene.heap_problem
+    calls = []
+
+    def reject_first(*args):
+        calls.append(1)
+        return "moved for the test" if len(calls) == 1 else real(*args)
+
+    monkeypatch.setattr(pile_scene, "heap_problem", reject_first)
+    _, _, info = build_scene("pile", OBJECTS, seed=7)
+    assert "in the scene with the robot, moved for the test" in info.rejected_drops
+    assert info.max_speed_after_settle < load_physics_config().settle_speed_mps

@@ -305,15 +305,17 @@ class SimBackend:
         return packed_placeable(objects, seed, self._scene)
 
     def pile_placeable(self, objects: tuple[str, ...], seed: int) -> bool:
-        """The scene builder's own pile drop (robot-free model, a few seconds; remembered, so
-        the round's trials in this process reuse it) with the trial config's scene and physics."""
+        """The scene builder's own pile drop and checks (a second or two; remembered, so the
+        round's trials in this process reuse it) with the trial config's scene, robot, physics."""
         from hsqbench.sim.physics import load_physics_config
+        from hsqbench.sim.robot import load_robot_config
         from hsqbench.sim.scene import load_scene_config, pile_placeable
 
         tc = self._trial_config()
         if self._scene is None:
             self._scene = load_scene_config(tc.scene)
-        return pile_placeable(objects, seed, self._scene, load_physics_config(tc.physics))
+        physics, robot = load_physics_config(tc.physics), load_robot_config(tc.robot)
+        return pile_placeable(objects, seed, self._scene, physics, robot)
 
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult:
         return self._module().run_isolated_trial(obj, seed, planner, self._trial_config())

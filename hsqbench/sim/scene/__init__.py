@@ -19,8 +19,9 @@ All are then settled (simulated with the arm holding its home pose) and the rest
 as the keyframe ``initial``. Everything random comes from ``np.random.default_rng(seed)``.
 
 Modules: :mod:`.config` (the scene config), :mod:`.info` (what a built scene holds),
-:mod:`.footprint` and :mod:`.placement` (isolated and packed placement), :mod:`.pile` (piles),
-:mod:`.world` (composition and settling), :mod:`.build` (:func:`build_scene`). Their public
+:mod:`.footprint` and :mod:`.placement` (isolated and packed placement), :mod:`.pile` (the
+drop) and :mod:`.pile_scene` (a pile as a scene), :mod:`.world` (composition and settling),
+:mod:`.settled` (the compiled, settled scene), :mod:`.build` (:func:`build_scene`). Their public
 names are re-exported here: ``from hsqbench.sim.scene import build_scene``.
 """
 
@@ -51,7 +52,8 @@ from hsqbench.sim.scene.info import (
     DepthCamera,
     SceneInfo,
 )
-from hsqbench.sim.scene.pile import PileDrop, PileError, drop_pile, pile_placeable
+from hsqbench.sim.scene.pile import PileDrop, PileError, drop_pile, heap_problem
+from hsqbench.sim.scene.pile_scene import pile_placeable, settled_pile
 from hsqbench.sim.scene.placement import (
     PlacementError,
     draw_object_names,
@@ -98,6 +100,7 @@ __all__ = [
     "draw_rests",
     "drop_pile",
     "footprint_corners",
+    "heap_problem",
     "hull_vertices",
     "layout_objects",
     "load_scene_config",
@@ -112,6 +115,7 @@ __all__ = [
     "rested_base_z",
     "scene_object_count",
     "settle",
+    "settled_pile",
     "world_files",
     "world_path",
 ]

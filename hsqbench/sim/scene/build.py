@@ -10,17 +10,18 @@ import numpy as np
 
 from hsqbench.sim.objects import ObjectLike
 from hsqbench.sim.physics import PhysicsConfig, load_physics_config
-from hsqbench.sim.robot import Panda, RobotConfig, load_robot_config
+from hsqbench.sim.robot import RobotConfig, load_robot_config
 from hsqbench.sim.scene.config import SceneConfig, load_scene_config
-from hsqbench.sim.scene.info import INITIAL_KEY, OBJECT_PREFIX, SceneInfo
-from hsqbench.sim.scene.pile import cached_pile
+from hsqbench.sim.scene.info import SceneInfo
+from hsqbench.sim.scene.pile_scene import settled_pile
 from hsqbench.sim.scene.placement import (
     draw_rests,
     layout_objects,
     resolve_scene_objects,
     scene_object_count,
 )
-from hsqbench.sim.scene.world import compose_posed, compose_scene, describe_scene, settle
+from hsqbench.sim.scene.settled import compile_settled
+from hsqbench.sim.scene.world import compose_scene, describe_scene
 
 
 def build_scene(
@@ -76,37 +77,24 @@ def build_scene_spec(
     physics = physics_config or load_physics_config()
     rng = np.random.default_rng(seed)
     assets = resolve_scene_objects(kind, objects, scene_object_count(kind, cfg), rng)
+    names = [a.name for a in assets]
     rests, rejected = None, []
     if kind == "pile":
-        pile = cached_pile(assets, seed, cfg, physics, rng)
-        rejected = pile.rejected
-        spec = compose_posed(assets, pile.poses, cfg, robot, physics)
+        built, rejected = settled_pile(assets, seed, cfg, robot, physics, rng)
     else:
         rests = draw_rests(assets, cfg.placement, rng)
         poses = layout_objects(assets, cfg, rng, rests)
         spec = compose_scene(assets, poses, cfg, robot, physics, rests)
-    spec.add_key(name=INITIAL_KEY)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    panda = Panda(model, robot.prefix)
-    panda.reset_home(data)
-    mujoco.mj_forward(model, data)
-
-    names = [a.name for a in assets]
-    bodies = {n: OBJECT_PREFIX + n for n in names}
-    body_ids = {n: model.body(b).id for n, b in bodies.items()}
-    settle_s, speed = settle(model, data, np.array(list(body_ids.values())), physics)
-    key = model.key(INITIAL_KEY).id
-    model.key_qpos[key] = data.qpos
-    model.key_qvel[key] = 0.0
-    model.key_ctrl[key] = data.ctrl
-    model.key_time[key] = 0.0
-    info = describe_scene(model, data, cfg, robot, kind, seed, names, bodies, body_ids, panda)
-    info.settle_time_s, info.max_speed_after_settle = settle_s, speed
+        built = compile_settled(spec, names, robot, physics)
+    model, data = built.model, built.data
+    info = describe_scene(
+        model, data, cfg, robot, kind, seed, names, built.bodies, built.body_ids, built.panda
+    )
+    info.settle_time_s, info.max_speed_after_settle = built.settle_time_s, built.max_speed
     info.resting_poses = {
         a.name: (-1 if rests is None else int(rests[i][0])) for i, a in enumerate(assets)
     }
     info.rejected_drops = list(rejected)
     info.reset(model, data)
     info.build_time_s = time.perf_counter() - t0
-    return spec, model, data, info
+    return built.spec, model, data, info

@@ -2,21 +2,22 @@
 from random orientations into a box over the workspace centre, the box removed, the heap settled.
 
 The drop runs in a model of its own: the static world, four temporary walls and the objects,
-without the robot (far from the box, it plays no part). Objects not yet dropped are parked away
+without the robot (far from the box, it plays no part while objects fall). Objects not yet dropped are parked away
 from everything, weightless (gravity compensation) and without contacts; dropping one gives it
 a pose, its weight and its contacts back. After the last drop the walls lose their contacts and
-the heap settles again. The settled poses then go into the ordinary scene
-(:func:`hsqbench.sim.scene.world.compose_posed`), so a pile is a scene of the same form as a
-packed one: the trial runner, cameras, judge and recorder need nothing new.
+the heap settles again. The settled poses then go into the ordinary scene, with the robot
+(:mod:`hsqbench.sim.scene.pile_scene`), which settles and is checked once more; so a pile is a
+scene of the same form as a packed one: the trial runner, cameras, judge and recorder need
+nothing new.
 
 A drop whose settling does not converge, or whose objects do not all end at rest on the table
-inside the workspace, is made again with the next draws of the same generator (the scene
+inside the workspace (in the drop model or in the final scene), is made again with the next draws of the same generator (the scene
 seed's), up to ``pile.max_drop_attempts``; the reasons are kept (:attr:`PileDrop.rejected`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -183,26 +184,39 @@ def _drop_pose(
     return None
 
 
-def _problem(drop: _Drop, speed: float) -> str | None:
-    """Why the settled heap is not a pile to use, or None."""
-    cfg, names = drop.cfg, [a.name for a in drop.assets]
-    if speed >= drop.physics.settle_speed_mps:
+def heap_problem(
+    names: Sequence[str],
+    vertices: Sequence[np.ndarray],
+    speed: float,
+    table_top_z: float,
+    cfg: SceneConfig,
+    physics: PhysicsConfig,
+) -> str | None:
+    """Why a settled heap is not a pile to use, or None: something still moves (``speed``, the
+    largest object speed at the end of settling), or an object (its hull ``vertices``, world
+    frame) is off the table or not wholly inside the workspace."""
+    if speed >= physics.settle_speed_mps:
         return (
-            f"the heap still moves at {speed:.3f} after {cfg.pile.settle_time_s} s "
-            f"(at rest: under {drop.physics.settle_speed_mps})"
+            f"the heap still moves at {speed:.3f} at the end of settling "
+            f"(at rest: under {physics.settle_speed_mps})"
         )
     ws = cfg.workspace
     lo = np.asarray(ws.centre_xy_m) - np.asarray(ws.size_m) / 2
     hi = np.asarray(ws.centre_xy_m) + np.asarray(ws.size_m) / 2
-    for i, name in enumerate(names):
-        v = drop.world_vertices(i)
-        if v[:, 2].min() < drop.table_top_z - _SINK_TOLERANCE_M:
+    for name, v in zip(names, vertices, strict=True):
+        if v[:, 2].min() < table_top_z - _SINK_TOLERANCE_M:
             return f"{name} fell off the table"
         if np.any(v[:, :2] < lo) or np.any(v[:, :2] > hi):
             return f"{name} ended (partly) outside the workspace"
-        if v[:, 2].max() > drop.table_top_z + ws.height_m:
+        if v[:, 2].max() > table_top_z + ws.height_m:
             return f"{name} reaches above the workspace's {ws.height_m} m height"
     return None
+
+
+def _problem(drop: _Drop, speed: float) -> str | None:
+    names = [a.name for a in drop.assets]
+    vertices = [drop.world_vertices(i) for i in range(len(names))]
+    return heap_problem(names, vertices, speed, drop.table_top_z, drop.cfg, drop.physics)
 
 
 def _attempt(drop: _Drop, rng: np.random.Generator) -> tuple[str | None, float]:
@@ -237,8 +251,12 @@ def drop_pile(
     cfg: SceneConfig,
     physics: PhysicsConfig,
     rng: np.random.Generator,
+    accept: Callable[[list[np.ndarray]], str | None] | None = None,
 ) -> PileDrop:
     """Drop ``assets`` into a pile (module docstring), drawing from ``rng``.
+
+    ``accept``: a further check of a drop's settled poses (the scene builder's: the pile in the
+    final scene, with the robot, is at rest on the table too); its reason rejects the drop.
 
     Raises:
         PileError: none of ``pile.max_drop_attempts`` drops gave a usable pile (names why).
@@ -255,6 +273,8 @@ def drop_pile(
     for _ in range(cfg.pile.max_drop_attempts):
         why, t = _attempt(drop, rng)
         total_s += t
+        if why is None and accept is not None:
+            why = accept(drop.poses())
         if why is None:
             return PileDrop(drop.poses(), rejected, total_s)
         rejected.append(why)
@@ -264,76 +284,3 @@ def drop_pile(
         f"{cfg.pile.max_drop_attempts} drops ({'; '.join(rejected)}); raise pile.max_drop_attempts "
         "or pile.settle_time_s, or widen the workspace"
     )
-
-
-# Piles already dropped in this process, by objects (and their hull files' times), seed and
-# configs: the parent's draw check (:func:`pile_placeable`) and, with one worker, every planner's
-# round of the same pile reuse one drop (seconds of simulation) instead of repeating it.
-_CACHE: dict[tuple, PileDrop | PileError] = {}
-_CACHE_SIZE = 64
-
-
-def _cache_key(assets, seed, cfg, physics) -> tuple | None:
-    import os
-
-    try:
-        files = tuple(
-            (a.name, tuple((str(p), os.stat(p).st_mtime_ns) for p in a.collision_meshes))
-            for a in assets
-        )
-        key = (files, seed, cfg, physics)
-        hash(key)
-    except (TypeError, OSError):
-        return None
-    return key
-
-
-def cached_pile(
-    assets: Sequence[ObjectLike],
-    seed: int,
-    cfg: SceneConfig,
-    physics: PhysicsConfig,
-    rng: np.random.Generator,
-) -> PileDrop:
-    """:func:`drop_pile`, remembered per process for objects from files (``rng`` must be the
-    scene seed's generator after the object draw, as :func:`build_scene` makes it)."""
-    key = _cache_key(assets, seed, cfg, physics)
-    if key is None:
-        return drop_pile(assets, cfg, physics, rng)
-    if key not in _CACHE:
-        try:
-            _CACHE[key] = drop_pile(assets, cfg, physics, rng)
-        except PileError as exc:
-            _CACHE[key] = exc
-        while len(_CACHE) > _CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-    hit = _CACHE[key]
-    if isinstance(hit, PileError):
-        raise PileError(str(hit))
-    return PileDrop([p.copy() for p in hit.poses], list(hit.rejected), hit.settle_time_s)
-
-
-def pile_placeable(
-    objects: Sequence[str | ObjectLike],
-    seed: int,
-    scene_config: SceneConfig | None = None,
-    physics_config: PhysicsConfig | None = None,
-) -> bool:
-    """Whether ``build_scene("pile", objects, seed)`` gets a pile that settles on the table.
-
-    Exact: the same seeded drops as the scene builder, in the robot-free drop model (a few
-    seconds; the result is remembered, so the round's trials in this process reuse it).
-    """
-    from hsqbench.sim.physics import load_physics_config
-    from hsqbench.sim.scene.config import load_scene_config
-    from hsqbench.sim.scene.placement import resolve_scene_objects
-
-    cfg = scene_config or load_scene_config()
-    physics = physics_config or load_physics_config()
-    rng = np.random.default_rng(seed)
-    assets = resolve_scene_objects("pile", objects, cfg.pile.n_objects, rng)
-    try:
-        cached_pile(assets, seed, cfg, physics, rng)
-    except PileError:
-        return False
-    return True
