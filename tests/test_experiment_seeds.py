@@ -6,7 +6,12 @@ import pytest
 
 from hsqbench.config import ConfigError
 from hsqbench.experiment.config import ExperimentConfig, load_experiment_config
-from hsqbench.experiment.seeds import build_trials, derive_seed, packed_round_objects
+from hsqbench.experiment.seeds import (
+    PackedDrawError,
+    build_trials,
+    derive_seed,
+    packed_round_objects,
+)
 
 
 def test_paper_protocol_sizes() -> None:
@@ -97,6 +102,13 @@ def test_selection_and_its_errors() -> None:
         ({"packed": {"objects_per_round": 6, "objects": ["a", "b"]}}, "objects_per_round"),
         ({"packed": {"rounds": 0}}, "rounds"),
         ({"isolated": {"enabled": False}, "packed": {"enabled": False}}, "disabled"),
+        (
+            {"pile": {"enabled": True, "objects_per_round": 3, "objects": ["a", "b"]}},
+            r"pile\.objects_per_round",
+        ),
+        ({"pile": {"max_draws": 0}}, r"pile\.max_draws"),
+        ({"pile": {"rounds": 0}}, r"pile\.rounds"),
+        ({"pile": {"box_size_m": [0.3, 0.3]}}, "unknown key"),
         ({"round": 3}, "round"),
     ],
 )
@@ -199,3 +211,48 @@ def test_paper_rounds_are_all_placeable_with_the_real_scene() -> None:
     round0 = {s.objects for s in specs if s.index == 0}
     assert len(round0) == 1 and bad not in round0
     assert {s.rejected_draws for s in specs if s.index == 0} == {(bad,)}
+
+
+# ---- pile rounds -------------------------------------------------------------------------------
+
+
+def test_pile_is_off_in_the_paper_protocol_and_on_in_its_companion_and_ycb() -> None:
+    paper = load_experiment_config("paper")
+    assert paper.enabled_experiments() == ("isolated", "packed")
+    companion = load_experiment_config("paper_pile")
+    assert companion.enabled_experiments() == ("pile",)
+    assert companion.pile.objects == paper.packed.objects
+    assert (companion.pile.rounds, companion.pile.objects_per_round) == (15, 5)
+    assert companion.planners == paper.planners
+    assert "pile" in load_experiment_config("ycb").enabled_experiments()
+
+
+def test_pile_rounds_have_their_own_seeds_keys_and_check() -> None:
+    config = load_experiment_config("paper_pile")
+    packed_calls: list = []
+    pile_calls: list = []
+    specs = build_trials(
+        config,
+        placeable=_refusing(set(), packed_calls),
+        pile_placeable=_refusing(set(), pile_calls),
+    )
+    assert not packed_calls and len(pile_calls) == 15  # one check per round, for all planners
+    piles = [s for s in specs if s.planner == "hsq"]
+    assert [s.key for s in piles[:2]] == ["pile/hsq/s0/round/000", "pile/hsq/s0/round/001"]
+    assert [s.seed for s in piles] == [derive_seed(0, "pile", "round", i) for i in range(15)]
+    assert {s.seed for s in piles}.isdisjoint(
+        derive_seed(0, "packed", "round", i) for i in range(15)
+    )
+    assert pile_calls[0][1] == piles[0].seed  # asked with the seed the scene is built with
+    with pytest.raises(ValueError, match="disabled"):
+        build_trials(config, experiments=["packed"])
+
+
+def test_an_unpilable_draw_is_replaced_and_noted() -> None:
+    config = load_experiment_config("paper_pile")
+    first = build_trials(config, planners=["hsq"])[0]
+    specs = build_trials(config, planners=["hsq"], pile_placeable=_refusing({first.objects}))
+    assert specs[0].objects != first.objects and specs[0].rejected_draws == (first.objects,)
+    assert "did not settle into a pile" in specs[0].draw_note
+    with pytest.raises(PackedDrawError, match=r"pile round 0 .* settle into a pile"):
+        build_trials(config, planners=["hsq"], pile_placeable=lambda o, s: False)

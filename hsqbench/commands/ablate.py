@@ -39,7 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--jobs", type=int, default=None, help="worker processes")
     parser.add_argument("--executor", choices=("local", "ray"), default="local")
-    parser.add_argument("--experiments", nargs="+", choices=("isolated", "packed"), default=None)
+    parser.add_argument(
+        "--experiments", nargs="+", choices=("isolated", "packed", "pile"), default=None
+    )
     parser.add_argument("--resume", action="store_true", help="continue the run --run NAME")
     parser.add_argument("--force", action="store_true", help="move an existing run folder aside")
     parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")

@@ -50,7 +50,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--experiments",
         nargs="+",
-        choices=("isolated", "packed"),
+        choices=("isolated", "packed", "pile"),
         default=None,
         help="only these experiments",
     )

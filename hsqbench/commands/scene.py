@@ -5,11 +5,16 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-HELP = "build an isolated or packed scene, print what it holds, render it to a PNG or export it as MJCF"
+HELP = "build an isolated, packed or pile scene, print what it holds, render it to a PNG or export it as MJCF"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--kind", choices=("isolated", "packed"), default="packed")
+    parser.add_argument(
+        "--kind",
+        choices=("isolated", "packed", "pile"),
+        default="packed",
+        help="packed: objects standing apart; pile: dropped into a box, the box removed",
+    )
     parser.add_argument("--seed", type=int, default=0, help="the same seed gives the same scene")
     parser.add_argument(
         "--objects",
@@ -63,6 +68,8 @@ def run(args: argparse.Namespace) -> int:
     for name in info.objects:
         x, y, z = info.initial_poses[name][:3]
         print(f"  {name:22s} at ({x:+.3f}, {y:+.3f}, {z:+.3f}) m")
+    for i, why in enumerate(info.rejected_drops):
+        print(f"  drop {i + 1} rejected and redrawn: {why}")
     print(
         f"settled in {info.settle_time_s:.2f} s simulated (max speed {info.max_speed_after_settle:.4f}); "
         f"built in {info.build_time_s:.1f} s"

@@ -11,7 +11,8 @@ HELP = "run one grasp trial (isolated object) or one packed round in the simulat
 _EPILOG = """\
 An isolated trial places --object at the seed's random upright pose and makes one attempt.
 A packed round (--scene packed) places five objects (--objects, or drawn by the seed) and makes
-attempts until the table is clear or two attempts in a row fail.
+attempts until the table is clear or two attempts in a row fail. A pile round (--scene pile) is
+the same on five objects dropped into a heap.
 
 Outcomes: success, no_grasp_found, unreachable, collision_on_approach, empty_grasp, dropped,
 sim_unstable. The same seed and config give the same outcomes.
@@ -28,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=int, default=0, metavar="N", help="the trial's seed")
     parser.add_argument(
-        "--scene", choices=("isolated", "packed"), default="isolated", help="kind of trial"
+        "--scene", choices=("isolated", "packed", "pile"), default="isolated", help="kind of trial"
     )
     parser.add_argument(
         "--objects",
@@ -119,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
             )
         else:
             result = run_packed_round(
-                args.objects, args.seed, args.planner, config, recorder=recorder
+                args.objects, args.seed, args.planner, config, recorder=recorder, kind=args.scene
             )
     finally:
         if recorder is not None:
@@ -134,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         n_ok = sum(a.success for a in result.attempts)
         print(
-            f"packed round, seed {result.seed}, planner {result.planner}: grasps "
+            f"{args.scene} round, seed {result.seed}, planner {result.planner}: grasps "
             f"{n_ok}/{len(result.attempts)} successful, cleared {len(result.objects_cleared)}/"
             f"{result.objects_presented} ({', '.join(result.objects_cleared) or 'none'}) of "
             f"{', '.join(result.objects)}"

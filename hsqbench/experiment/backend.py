@@ -1,7 +1,8 @@
 """How the runner runs one trial: a :class:`TrialBackend`, called inside a worker process.
 
 The default backend, :class:`SimBackend`, calls the MuJoCo trial runner
-(``hsqbench.sim.trial.run_isolated_trial`` / ``run_packed_round``), imported lazily in the
+(``hsqbench.sim.trial.run_isolated_trial`` / ``run_packed_round``, the latter also for pile
+rounds with ``kind="pile"``), imported lazily in the
 worker. Tests inject a fake backend (:mod:`hsqbench.experiment.fake_backend`). A backend must be
 picklable (it is sent to worker processes) and deterministic for a given trial seed.
 
@@ -74,9 +75,16 @@ class TrialBackend(Protocol):
         asked about objects that :meth:`prepare` made ready."""
         ...
 
+    def pile_placeable(self, objects: tuple[str, ...], seed: int) -> bool:
+        """Whether a pile round of ``objects`` with ``seed`` gets a pile that settles on the
+        table inside the workspace (in the parent, as :meth:`placeable`)."""
+        ...
+
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult: ...
 
     def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult: ...
+
+    def run_pile(self, objects: list[str], seed: int, planner: str) -> RoundResult: ...
 
 
 @dataclass
@@ -140,6 +148,8 @@ def execute_trial(backend: TrialBackend, spec: TrialSpec) -> TrialRun:
     try:
         if spec.experiment == "isolated":
             result = backend.run_isolated(spec.objects[0], spec.seed, spec.planner)
+        elif spec.experiment == "pile":
+            result = backend.run_pile(list(spec.objects), spec.seed, spec.planner)
         else:
             result = backend.run_packed(list(spec.objects), spec.seed, spec.planner)
         _check_result(spec, result)
@@ -300,8 +310,27 @@ class SimBackend:
             self._scene = load_part(tc.scene, "scene", getattr(tc, "overrides", {}))
         return packed_placeable(objects, seed, self._scene)
 
+    def pile_placeable(self, objects: tuple[str, ...], seed: int) -> bool:
+        """The scene builder's own pile drop and checks (a second or two; remembered, so the
+        round's trials in this process reuse it) with the trial config's scene, robot, physics."""
+        from hsqbench.overrides import load_part
+        from hsqbench.sim.scene import pile_placeable
+
+        tc = self._trial_config()
+        overrides = getattr(tc, "overrides", {})
+        if self._scene is None:
+            self._scene = load_part(tc.scene, "scene", overrides)
+        physics = load_part(tc.physics, "physics", overrides)
+        robot = load_part(tc.robot, "robot", overrides)
+        return pile_placeable(objects, seed, self._scene, physics, robot)
+
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult:
         return self._module().run_isolated_trial(obj, seed, planner, self._trial_config())
 
     def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult:
         return self._module().run_packed_round(objects, seed, planner, self._trial_config())
+
+    def run_pile(self, objects: list[str], seed: int, planner: str) -> RoundResult:
+        return self._module().run_packed_round(
+            objects, seed, planner, self._trial_config(), kind="pile"
+        )

@@ -16,7 +16,7 @@ from typing import Any
 import pandas as pd
 
 #: Protocol settings that decide which trials exist and what they present.
-_SAME = ("seeds", "trial_config", "isolated", "packed")
+_SAME = ("seeds", "trial_config", "isolated", "packed", "pile")
 
 
 class RunMismatch(ValueError):
@@ -26,7 +26,10 @@ class RunMismatch(ValueError):
 def _protocol(meta: dict[str, Any]) -> dict[str, Any]:
     config = meta.get("config", {})
     out = {k: config.get(k) for k in _SAME}
+    # Runs made before pile rounds existed had none: as a run with piles disabled.
+    out["pile"] = out["pile"] or {"enabled": False}
     out["packed_draws"] = meta.get("packed_draws")
+    out["pile_draws"] = meta.get("pile_draws") or {}
     return out
 
 
@@ -45,7 +48,7 @@ def combine(main: Any, other: Any, other_dir: Path) -> None:
         RunMismatch: the runs' protocols differ (names the first setting that does).
     """
     mine, theirs = _protocol(main.meta), _protocol(other.meta)
-    for key in (*_SAME, "packed_draws"):
+    for key in (*_SAME, "packed_draws", "pile_draws"):
         if not _same(mine[key], theirs[key]):
             raise RunMismatch(
                 f"{other_dir}: its '{key}' differs from the main run's, so its trials present "

@@ -12,7 +12,9 @@ from pathlib import Path
 
 from hsqbench.config import ConfigError, load_config
 
-EXPERIMENTS = ("isolated", "packed")
+EXPERIMENTS = ("isolated", "packed", "pile")
+#: Experiments run as clutter-removal rounds (one record per round in ``rounds.csv``).
+ROUND_EXPERIMENTS = ("packed", "pile")
 
 # The paper's 15 objects (YCB ids 003-077); the same names as ``HSQ_YCB_DIR/objects.csv``.
 YCB_OBJECTS = (
@@ -115,19 +117,38 @@ class PackedConfig:
     objects_per_round: int = 5
     max_draws: int = 10
 
+    #: The config section's name, for messages.
+    SECTION = "packed"
+
     def __post_init__(self) -> None:
-        names = resolve_objects(self.objects, self.exclude, "packed.objects")
+        where = self.SECTION
+        names = resolve_objects(self.objects, self.exclude, f"{where}.objects")
         object.__setattr__(self, "objects", names)
-        _check_objects(self.objects, "packed.objects")
+        _check_objects(self.objects, f"{where}.objects")
         if self.rounds < 1:
-            raise ConfigError(f"packed.rounds must be >= 1, got {self.rounds}")
+            raise ConfigError(f"{where}.rounds must be >= 1, got {self.rounds}")
         if not 1 <= self.objects_per_round <= len(self.objects):
             raise ConfigError(
-                f"packed.objects_per_round must be between 1 and the {len(self.objects)} objects "
-                f"of packed.objects, got {self.objects_per_round}"
+                f"{where}.objects_per_round must be between 1 and the {len(self.objects)} "
+                f"objects of {where}.objects, got {self.objects_per_round}"
             )
         if self.max_draws < 1:
-            raise ConfigError(f"packed.max_draws must be >= 1, got {self.max_draws}")
+            raise ConfigError(f"{where}.max_draws must be >= 1, got {self.max_draws}")
+
+
+@dataclass(frozen=True)
+class PileConfig(PackedConfig):
+    """Pile scenes (VGN/GIGA's clutter protocol; Table IV): rounds as packed ones, but the
+    objects are dropped into a heap (:mod:`hsqbench.sim.scene.pile`) and touch each other.
+
+    **Off unless a config enables it** (``enabled: false`` by default): the paper has no pile
+    experiment, so ``paper.yaml`` leaves it out and ``paper_pile.yaml`` adds it. Same fields
+    and the same stop rule as packed rounds; a draw whose pile does not settle on the table in
+    the workspace is replaced by the round's next draw, up to ``max_draws``.
+    """
+
+    enabled: bool = False
+    SECTION = "pile"
 
 
 @dataclass(frozen=True)
@@ -142,6 +163,7 @@ class ExperimentConfig:
         trial_config: name (in ``configs/``) or path of the trial runner's config.
         confidence: level of the Wilson intervals in the report, in (0, 1).
         isolated, packed: the two experiments of the paper.
+        pile: objects heaped and touching (VGN/GIGA's pile scenes), off by default.
     """
 
     planners: tuple[str, ...] = ("hsq", "single-sq", "antipodal")
@@ -150,6 +172,7 @@ class ExperimentConfig:
     confidence: float = 0.95
     isolated: IsolatedConfig = field(default_factory=IsolatedConfig)
     packed: PackedConfig = field(default_factory=PackedConfig)
+    pile: PileConfig = field(default_factory=PileConfig)
 
     def __post_init__(self) -> None:
         if not self.planners:
@@ -166,8 +189,11 @@ class ExperimentConfig:
             raise ConfigError(f"seeds: must be distinct non-negative integers, got {self.seeds}")
         if not 0.0 < self.confidence < 1.0:
             raise ConfigError(f"confidence must be in (0, 1), got {self.confidence}")
-        if not (self.isolated.enabled or self.packed.enabled):
-            raise ConfigError("both experiments are disabled: enable isolated or packed")
+        if not self.enabled_experiments():
+            raise ConfigError(
+                f"every experiment is disabled: enable one of {list(EXPERIMENTS)} "
+                "(e.g. isolated: {enabled: true})"
+            )
 
     def enabled_experiments(self) -> tuple[str, ...]:
         return tuple(e for e in EXPERIMENTS if getattr(self, e).enabled)

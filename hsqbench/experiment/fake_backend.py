@@ -82,6 +82,10 @@ class FakeBackend:
             raise AssertionError(f"placeable asked about unbuildable objects {objects}")
         return not any(set(group) <= set(objects) for group in self.unplaceable)
 
+    def pile_placeable(self, objects: tuple[str, ...], seed: int) -> bool:
+        """As :meth:`placeable`: ``unplaceable`` groups do not pile either."""
+        return self.placeable(objects, seed)
+
     def _enter(self, what: tuple[str, ...]) -> None:
         if self.interrupt_after is not None and self._calls >= self.interrupt_after:
             raise KeyboardInterrupt(f"fake backend interrupted after {self._calls} calls")
@@ -139,3 +143,7 @@ class FakeBackend:
             else:
                 misses += 1
         return RoundResult(list(objects), seed, planner, attempts, cleared)
+
+    def run_pile(self, objects: list[str], seed: int, planner: str) -> RoundResult:
+        """A pile round: the packed rule on the same fake draws."""
+        return self.run_packed(objects, seed, planner)

@@ -50,8 +50,10 @@ def render_markdown(
     t2: pd.DataFrame,
     outcomes: pd.DataFrame,
     times: pd.DataFrame,
+    after_table2: list[str] | tuple[str, ...] = (),
 ) -> str:
-    """The human-readable report: both tables beside the paper's rows, outcomes, timings."""
+    """The human-readable report: both tables beside the paper's rows, outcomes, timings;
+    ``after_table2``: lines of further tables (Table IV, :mod:`hsqbench.experiment.pile_table`)."""
     conf = f"{100 * data.confidence:g} %"
     meta = data.meta
     versions = sorted(set(data.attempts["code_version"])) if len(data.attempts) else []
@@ -165,6 +167,7 @@ def render_markdown(
         headers += ["GSR graspable", f"{conf} CI", "CR graspable", f"{conf} CI"]
     headers += ["rounds", "errors"]
     out += [_md([*headers, "source"], rows), ""]
+    out += list(after_table2)
 
     if not outcomes.empty:
         out += ["## Outcomes per planner (attempt counts; `error` = trials that could not run)", ""]

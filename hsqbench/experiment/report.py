@@ -25,12 +25,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from hsqbench.experiment.config import EXPERIMENTS
 from hsqbench.experiment.graspable import (
     cr_graspable,
     gsr_graspable,
     method_label,
 )
 from hsqbench.experiment.markdown import MEASURED, OUTCOME_COLUMNS, render_markdown
+from hsqbench.experiment.pile_table import TABLE4_CSV, render_table4, table4
 from hsqbench.experiment.plots import plot_gsr_per_object, plot_outcomes, plot_planning_time
 from hsqbench.experiment.reported import PROVENANCE, reported_rows
 from hsqbench.experiment.results import (
@@ -307,7 +309,7 @@ def outcome_table(data: RunData) -> pd.DataFrame:
     """Counts of each attempt outcome (and of error trials) per experiment and planner."""
     rows = []
     df = data.attempts
-    for exp in ("isolated", "packed"):
+    for exp in EXPERIMENTS:
         for p in data.planners:
             sel = df[(df["experiment"] == exp) & (df["planner"] == p)] if len(df) else df
             if sel.empty:
@@ -322,7 +324,7 @@ def outcome_table(data: RunData) -> pd.DataFrame:
 def time_table(data: RunData) -> pd.DataFrame:
     """Planning time per experiment and planner (median, p90, mean, max), seconds."""
     rows = []
-    for exp in ("isolated", "packed"):
+    for exp in EXPERIMENTS:
         for p in data.planners:
             ok = _ok(data.attempts, exp, p)
             times = ok["planning_s"].to_numpy(dtype=float) if len(ok) else np.array([])
@@ -358,6 +360,7 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
         combine(data, load_run(other), Path(other))
     t1, t1o, t2 = table1(data), table1_per_object(data), table2(data)
     outcomes, times = outcome_table(data), time_table(data)
+    t4 = table4(data)
     written = []
     for name, df in (
         (TABLE1_CSV, t1),
@@ -368,8 +371,11 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
     ):
         df.to_csv(run_dir / name, index=False)
         written.append(run_dir / name)
+    if not t4.empty:
+        t4.to_csv(run_dir / TABLE4_CSV, index=False)
+        written.append(run_dir / TABLE4_CSV)
     md = run_dir / TABLES_MD
-    md.write_text(render_markdown(data, t1, t1o, t2, outcomes, times))
+    md.write_text(render_markdown(data, t1, t1o, t2, outcomes, times, render_table4(data, t4)))
     written.append(md)
     if not t1o.empty:
         plot_gsr_per_object(data, t1o, run_dir / GSR_PLOT)

@@ -2,14 +2,14 @@
 
 Layout of ``results/<run>/``:
 
-- ``attempts.csv``: one row per grasp attempt (isolated and packed), or one ``status=error`` row
-  for a trial that could not run (``attempt_index=-1``, ``n_attempts=0``).
-- ``rounds.csv``: one row per packed round, written *after* the round's attempt rows; its
+- ``attempts.csv``: one row per grasp attempt (isolated, packed and pile), or one
+  ``status=error`` row for a trial that could not run (``attempt_index=-1``, ``n_attempts=0``).
+- ``rounds.csv``: one row per packed or pile round (column ``trial_key`` names which), written *after* the round's attempt rows; its
   ``detail`` names the draws rejected before the round's objects, if any (not placeable).
 - ``run.json``: the full config, its hash, code version, machine (host, CPU model, cores, Python
   and the versions of every package hsqbench depends on: :mod:`hsqbench.experiment.machine`), the
   sessions that ran (each with its own machine record: a resume may run elsewhere) and
-  ``packed_draws`` (each round's objects and rejected draws).
+  ``packed_draws`` and ``pile_draws`` (each round's objects and rejected draws).
 
 Durability: only the parent process writes. All rows of one trial go to a file in one
 ``os.write`` on an ``O_APPEND`` descriptor, followed by ``fsync``; every field is kept on one
@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from hsqbench.experiment.backend import TrialRun
+from hsqbench.experiment.config import ROUND_EXPERIMENTS
 from hsqbench.sim.outcome import RoundResult
 
 ATTEMPTS_FILE = "attempts.csv"
@@ -201,7 +202,7 @@ def rows_for(
                 }
             )
     attempt_rows = [{c: _fmt(r.get(c)) for c in ATTEMPT_COLUMNS} for r in attempts]
-    if spec.experiment != "packed":
+    if spec.experiment not in ROUND_EXPERIMENTS:
         return attempt_rows, None
     if isinstance(result, RoundResult):
         round_row: dict[str, Any] = {
@@ -345,7 +346,7 @@ def collect(attempt_rows: list[dict[str, str]], round_rows: list[dict[str, str]]
             continue
         if len(rows) > len(chosen):
             duplicates.add(key)
-        if rows[0]["experiment"] == "packed":
+        if rows[0]["experiment"] in ROUND_EXPERIMENTS:
             candidates = rounds_by_key.get(key, [])
             if not candidates:
                 incomplete.add(key)

@@ -85,12 +85,14 @@ def unusable_error(spec: TrialSpec, unusable: dict[str, str]) -> str | None:
     )
 
 
-def packed_draws(specs: Iterable[TrialSpec]) -> dict[str, dict[str, list]]:
-    """The draw of each packed round, for ``run.json``: ``s<base>/round/<index>`` -> the
-    objects and the rejected draws (those that could not be placed apart)."""
+def packed_draws(
+    specs: Iterable[TrialSpec], experiment: str = "packed"
+) -> dict[str, dict[str, list]]:
+    """The draw of each packed (or pile) round, for ``run.json``: ``s<base>/round/<index>`` ->
+    the objects and the rejected draws (those that could not be placed apart, or piled)."""
     out: dict[str, dict[str, list]] = {}
     for s in specs:
-        if s.experiment == "packed":
+        if s.experiment == experiment:
             out[f"s{s.base_seed}/round/{s.index:03d}"] = {
                 "objects": list(s.objects),
                 "rejected": [list(d) for d in s.rejected_draws],
@@ -164,17 +166,25 @@ def run_benchmark(
         # the other rounds draw exactly what they draw when every object works.
         return not unusable.keys().isdisjoint(objects) or backend.placeable(objects, seed)
 
-    specs = build_trials(config, planners, experiments, placeable)
+    def pile_placeable(objects: tuple[str, ...], seed: int) -> bool:
+        return not unusable.keys().isdisjoint(objects) or backend.pile_placeable(objects, seed)
+
+    specs = build_trials(config, planners, experiments, placeable, pile_placeable)
     selected_planners = tuple(dict.fromkeys(s.planner for s in specs))
     fingerprint = backend.fingerprint()
     chash = config_hash(RunIdentity(config, fingerprint))
 
     draws = packed_draws(specs)
+    piles = packed_draws(specs, "pile")
     if meta is not None:
         changed = sorted(
             k
             for k, v in draws.items()
             if k in meta.get("packed_draws", {}) and meta["packed_draws"][k] != v
+        ) + sorted(
+            f"pile {k}"
+            for k, v in piles.items()
+            if k in meta.get("pile_draws", {}) and meta["pile_draws"][k] != v
         )
         if changed:
             raise ResultsError(
@@ -205,11 +215,15 @@ def run_benchmark(
                 "sessions": [],
             }
         meta["packed_draws"] = {**meta.get("packed_draws", {}), **draws}
+        if piles or "pile_draws" in meta:
+            meta["pile_draws"] = {**meta.get("pile_draws", {}), **piles}
         redrawn = sorted(k for k, v in draws.items() if v["rejected"])
+        redrawn += sorted(f"pile {k}" for k, v in piles.items() if v["rejected"])
         if redrawn and progress:
             print(
-                f"packed round(s) {redrawn} redrawn: their first draws cannot be placed apart "
-                f"(packed_draws in {RUN_FILE}, detail in rounds.csv)",
+                f"round(s) {redrawn} redrawn: their first draws cannot be placed apart (packed) "
+                f"or do not settle into a pile (pile) (packed_draws, pile_draws in {RUN_FILE}; "
+                "detail in rounds.csv)",
                 file=sys.stderr,
             )
         kept = store.prepare(retry_errors=retry_errors)

@@ -12,6 +12,9 @@ Seed derivation (documented contract; changing it changes every result):
   check is given (the backend's ``placeable``), a draw that cannot be placed apart with the
   round's seed is rejected and the *same* generator draws again, up to ``packed.max_draws``
   draws; the first draw is unchanged, so rounds that were placeable keep their objects.
+- pile round ``index``: the same with ``experiment`` = ``"pile"`` (its own seeds and draws), and
+  the pile check (the backend's ``pile_placeable``: the pile settles on the table) in place of
+  the placement check.
 
 The planner is deliberately *not* part of the seed: every planner meets the same poses and the
 same rounds, so planners are compared on paired trials. Seeds are 31-bit so that any consumer
@@ -29,7 +32,7 @@ import numpy as np
 
 from hsqbench.experiment.config import EXPERIMENTS, ExperimentConfig
 
-Experiment = Literal["isolated", "packed"]
+Experiment = Literal["isolated", "packed", "pile"]
 
 #: Whether a packed draw can be placed apart: ``(objects, round seed) -> bool``.
 Placeable = Callable[[tuple[str, ...], int], bool]
@@ -61,10 +64,12 @@ class TrialSpec:
         if not self.rejected_draws:
             return ""
         listed = " | ".join(";".join(d) for d in self.rejected_draws)
-        return (
-            f"redrawn: {len(self.rejected_draws)} draw(s) could not be placed apart and were "
-            f"replaced ({listed})"
+        why = (
+            "did not settle into a pile"
+            if self.experiment == "pile"
+            else "could not be placed apart"
         )
+        return f"redrawn: {len(self.rejected_draws)} draw(s) {why} and were replaced ({listed})"
 
     @property
     def key(self) -> str:
@@ -108,20 +113,22 @@ def draw_packed_round(
     index: int,
     placeable: Placeable | None = None,
     max_draws: int = 1,
+    experiment: str = "packed",
 ) -> PackedDraw:
     """The objects of packed round ``index``: the first draw that ``placeable`` accepts.
 
     Draws come one after another from the round's generator (see the module docstring);
     ``placeable`` is asked with the round's seed, the seed its scene is built with, so an
     accepted draw is one the scene builder places. ``None`` accepts the first draw.
+    ``experiment``: ``"packed"`` or ``"pile"``, whose rounds have seeds of their own.
 
     Raises:
         PackedDrawError: none of ``max_draws`` draws is placeable.
     """
     if max_draws < 1:
         raise ValueError(f"max_draws must be >= 1, got {max_draws}")
-    rng = np.random.default_rng(derive_seed(base_seed, "packed", "draw", index))
-    seed = derive_seed(base_seed, "packed", "round", index)
+    rng = np.random.default_rng(derive_seed(base_seed, experiment, "draw", index))
+    seed = derive_seed(base_seed, experiment, "round", index)
     rejected: list[tuple[str, ...]] = []
     for _ in range(max_draws):
         objects = _draw(rng, pool, per_round)
@@ -129,11 +136,12 @@ def draw_packed_round(
         if objects not in rejected and (placeable is None or placeable(objects, seed)):
             return PackedDraw(objects, tuple(rejected))
         rejected.append(objects)
+    fails = "settle into a pile on the table" if experiment == "pile" else "be placed apart"
     raise PackedDrawError(
-        f"packed round {index} (base seed {base_seed}): none of {max_draws} draws of "
-        f"{per_round} objects can be placed apart in the workspace (first: {';'.join(rejected[0])}); "
-        "raise packed.max_draws, lower packed.objects_per_round, or enlarge workspace.size_m "
-        "in the scene config"
+        f"{experiment} round {index} (base seed {base_seed}): none of {max_draws} draws of "
+        f"{per_round} objects can {fails} in the workspace (first: {';'.join(rejected[0])}); "
+        f"raise {experiment}.max_draws, lower {experiment}.objects_per_round, or enlarge "
+        "workspace.size_m in the scene config"
     )
 
 
@@ -142,6 +150,7 @@ def build_trials(
     planners: Iterable[str] | None = None,
     experiments: Iterable[str] | None = None,
     placeable: Placeable | None = None,
+    pile_placeable: Placeable | None = None,
 ) -> list[TrialSpec]:
     """Every trial of ``config``, optionally restricted to some planners and experiments.
 
@@ -149,7 +158,7 @@ def build_trials(
     covered all planners on the same trials (paired data), and the packed rounds come after the
     isolated trials of the same seed. Each packed round is drawn once, here, for all planners
     (:func:`draw_packed_round` with ``placeable``, the backend's placement check; None: no
-    check, the first draw).
+    check, the first draw); pile rounds likewise with ``pile_placeable``.
 
     Raises:
         ValueError: a requested planner or experiment is not in the config (or is disabled).
@@ -178,15 +187,16 @@ def build_trials(
                 for i in range(iso.attempts_per_object):
                     seed = derive_seed(base, "isolated", obj, i)
                     specs.extend(TrialSpec("isolated", p, base, i, (obj,), seed) for p in planners)
-        if "packed" in experiments:
-            pk = config.packed
+        for exp, check in (("packed", placeable), ("pile", pile_placeable)):
+            if exp not in experiments:
+                continue
+            pk = getattr(config, exp)
             for i in range(pk.rounds):
                 draw = draw_packed_round(
-                    pk.objects, pk.objects_per_round, base, i, placeable, pk.max_draws
+                    pk.objects, pk.objects_per_round, base, i, check, pk.max_draws, exp
                 )
-                seed = derive_seed(base, "packed", "round", i)
+                seed = derive_seed(base, exp, "round", i)
                 specs.extend(
-                    TrialSpec("packed", p, base, i, draw.objects, seed, draw.rejected)
-                    for p in planners
+                    TrialSpec(exp, p, base, i, draw.objects, seed, draw.rejected) for p in planners
                 )
     return specs

@@ -162,6 +162,15 @@ class PackedConfig:
 
 
 @dataclass(frozen=True)
+class PileRoundConfig:
+    """Pile rounds: the packed rule (``packed:``), plus whether a round also ends at the first
+    attempt where the planner finds no grasp (VGN/GIGA's rule; off: it counts as a failure, as
+    in packed rounds)."""
+
+    stop_on_no_grasp: bool = False
+
+
+@dataclass(frozen=True)
 class TrialConfig:
     """``configs/trial.yaml``: how one trial runs (see the comments there for each reason).
 
@@ -176,7 +185,7 @@ class TrialConfig:
             whether the presentation is graspable at all (``Attempt.graspable``); None: no check.
         max_ranks: grasps tried in score order before an attempt is ``unreachable``.
         min_cloud_points: fewer perceived points than this: nothing to grasp.
-        execution, ik, motion, judge, packed: see their classes.
+        execution, ik, motion, judge, packed, pile: see their classes.
         overrides: dotted paths into the trial's config tree -> values (a sweep point's
             settings; :mod:`hsqbench.overrides`): the parts' paths apply when a part is loaded,
             the own fields' are already applied.
@@ -197,6 +206,7 @@ class TrialConfig:
     motion: MotionConfig = field(default_factory=MotionConfig)
     judge: JudgeConfig = field(default_factory=JudgeConfig)
     packed: PackedConfig = field(default_factory=PackedConfig)
+    pile: PileRoundConfig = field(default_factory=PileRoundConfig)
     overrides: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -1070,19 +1080,24 @@ def run_packed_round(
     *,
     recorder: Recorder | None = None,
     traces: list[AttemptTrace] | None = None,
+    kind: str = "packed",
 ) -> RoundResult:
     """A packed round: the objects placed apart (drawn by seed when ``objects`` is None), then
     attempts until no object is left on the table or ``max_consecutive_failures`` in a row.
 
     Objects in the bin after an attempt are cleared; objects that fell off the table are removed
-    but not cleared. ``h_delta`` is off (``PlanningContext.packed``).
+    but not cleared. ``h_delta`` is off (``PlanningContext.packed``). ``kind="pile"``: the same
+    round on a pile scene (:mod:`hsqbench.sim.scene.pile`), which also ends at the first attempt
+    without a grasp when ``pile.stop_on_no_grasp`` is set.
     """
+    if kind not in ("packed", "pile"):
+        raise ValueError(f"a clutter-removal round is packed or pile, got {kind!r}")
     cfg = config if config is not None else load_trial_config()
     plan = resolve_planner(planner, cfg)
     attempts: list[Attempt] = []
     cleared: list[str] = []
     graspable: list[str] | None = None
-    with TrialEnv.build("packed", objects, seed, cfg, recorder) as env:
+    with TrialEnv.build(kind, objects, seed, cfg, recorder) as env:
         failures = 0
         for i in range(cfg.packed.max_attempts):
             if not env.objects_on_table():
@@ -1111,6 +1126,12 @@ def run_packed_round(
                     env.remove(name)
             failures = 0 if attempt.success else failures + 1
             if failures >= cfg.packed.max_consecutive_failures:
+                break
+            if (
+                kind == "pile"
+                and cfg.pile.stop_on_no_grasp
+                and attempt.outcome == Outcome.NO_GRASP_FOUND
+            ):
                 break
         names = list(env.info.objects)
     return RoundResult(
