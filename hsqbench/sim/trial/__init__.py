@@ -57,6 +57,7 @@ from hsqbench.sim.trial.config import (
     PackedConfig,
     TrialConfig,
     load_trial_config,
+    named_inputs,
 )
 from hsqbench.sim.trial.env import TrialEnv
 from hsqbench.sim.trial.execution import ExecutionResult, execute_grasp
@@ -74,6 +75,7 @@ __all__ = [
     "TrialEnv",
     "execute_grasp",
     "load_trial_config",
+    "named_inputs",
     "plan_grasp_motion",
     "plan_motion",
     "resolve_planner",

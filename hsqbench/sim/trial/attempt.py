@@ -64,7 +64,7 @@ def resolve_planner(planner: Any, config: TrialConfig) -> Any:
     if isinstance(planner, str):
         from hsqbench.planner import get_planner
 
-        return get_planner(planner, config.planner_config)
+        return get_planner(planner, config.planners.for_planner(planner))
     if not hasattr(planner, "plan"):
         raise TypeError(
             f"planner must be a name or have a plan(points, context) method: {planner!r}"

@@ -1,16 +1,24 @@
-"""The trial runner's configuration (``configs/trial.yaml``): execution geometry, the packed
-stop rule and the whole trial config."""
+"""The trial runner's configuration (``configs/trial.yaml``): execution geometry and the whole
+trial config tree (the packed stop rule: :mod:`hsqbench.sim.stop_rule`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
-from hsqbench.config import load_config
+from hsqbench.assets.config import AssetsConfig, load_assets_config
+from hsqbench.config import load_tree
+from hsqbench.planner.configs import PlannerConfigs
+from hsqbench.planner.oracle import OracleConfig
 from hsqbench.sim.ik import IKConfig
 from hsqbench.sim.judge import JudgeConfig
 from hsqbench.sim.motion import MotionConfig
+from hsqbench.sim.perception import PerceptionConfig
+from hsqbench.sim.physics import PhysicsConfig
+from hsqbench.sim.robot import RobotConfig
+from hsqbench.sim.scene import SceneConfig
+from hsqbench.sim.stop_rule import PackedConfig
 from hsqbench.sim.surface_sensor import SurfaceSensorConfig
 
 
@@ -65,44 +73,36 @@ class ExecutionConfig:
 
 
 @dataclass(frozen=True)
-class PackedConfig:
-    """Packed-round rule: stop after ``max_consecutive_failures`` failures in a row (the
-    paper: two) or ``max_attempts`` attempts (a cap that the rule reaches first in practice)."""
-
-    max_consecutive_failures: int = 2
-    max_attempts: int = 15
-
-    def __post_init__(self) -> None:
-        if self.max_consecutive_failures < 1 or self.max_attempts < 1:
-            raise ValueError("packed: max_consecutive_failures and max_attempts must be >= 1")
-
-
-@dataclass(frozen=True)
 class TrialConfig:
-    """``configs/trial.yaml``: how one trial runs (see the comments there for each reason).
+    """``configs/trial.yaml``: how one trial runs, the whole tree of settings that a trial's
+    results depend on (see the comments there for each reason). In YAML each nested config may
+    be given by name (``scene: scene`` loads ``configs/scene.yaml``); loaded, it is the object.
 
     Attributes:
-        scene, robot, physics: config names (in ``configs/``) of the scene parts.
+        scene, robot, physics: the scene parts.
         sensor: ``cameras`` (rendered depth, :mod:`hsqbench.sim.perception`) or ``surface``
             (the fast stand-in, :mod:`hsqbench.sim.surface_sensor`).
-        perception: config name of the cameras' perception (``sensor: cameras``).
+        perception: the cameras' perception (``sensor: cameras``).
         surface: settings of the stand-in (``sensor: surface``).
-        planner_config: config handed to ``get_planner`` (None: the planner's default).
-        graspability: oracle config (``configs/oracle.yaml``) with which every attempt checks
-            whether the presentation is graspable at all (``Attempt.graspable``); None: no check.
+        planners: each planner's config (:class:`~hsqbench.planner.configs.PlannerConfigs`).
+        graspability: oracle config with which every attempt checks whether the presentation
+            is graspable at all (``Attempt.graspable``); None: no check.
+        assets: the object library's build settings (hulls, inertia: they change the physics).
         max_ranks: grasps tried in score order before an attempt is ``unreachable``.
         min_cloud_points: fewer perceived points than this: nothing to grasp.
         execution, ik, motion, judge, packed: see their classes.
     """
 
-    scene: str = "scene"
-    robot: str = "robot"
-    physics: str = "physics"
+    scene: SceneConfig = field(default_factory=SceneConfig)
+    robot: RobotConfig = field(default_factory=RobotConfig)
+    physics: PhysicsConfig = field(default_factory=PhysicsConfig)
     sensor: Literal["cameras", "surface"] = "cameras"
-    perception: str = "perception"
+    perception: PerceptionConfig = field(default_factory=PerceptionConfig)
     surface: SurfaceSensorConfig = field(default_factory=SurfaceSensorConfig)
-    planner_config: str | None = None
-    graspability: str | None = "oracle"
+    planners: PlannerConfigs = field(default_factory=PlannerConfigs)
+    graspability: OracleConfig | None = field(default_factory=OracleConfig)
+    # The library's object lists are data, not settings: the default is configs/assets.yaml.
+    assets: AssetsConfig = field(default_factory=load_assets_config)
     max_ranks: int = 48
     min_cloud_points: int = 30
     execution: ExecutionConfig = field(default_factory=ExecutionConfig)
@@ -116,6 +116,35 @@ class TrialConfig:
             raise ValueError(f"max_ranks must be >= 1, got {self.max_ranks}")
 
 
-def load_trial_config(path: str | Path | None = "trial") -> TrialConfig:
-    """Load ``configs/trial.yaml`` (or another file); ``None`` gives the built-in defaults."""
-    return load_config(TrialConfig, path)
+def load_trial_config(
+    path: str | Path | None = "trial", overrides: dict[str, Any] | None = None
+) -> TrialConfig:
+    """The resolved trial config tree of ``configs/trial.yaml`` (or another file), with
+    ``overrides`` (``{"perception.tof.sigma_quad_per_m": 0.01, ...}``) applied to its data
+    before any dataclass is built (:func:`hsqbench.config.load_tree`); ``None`` gives the
+    built-in defaults, which equal ``configs/trial.yaml``."""
+    if path is None:
+        if overrides:
+            raise ValueError("overrides need a config file to apply to")
+        return TrialConfig()
+    return load_tree(TrialConfig, path, overrides)
+
+
+def named_inputs(config: TrialConfig) -> dict[str, Any]:
+    """What the tree names below the level of its configs (files read as they are): the
+    planner configs that the baselines and the oracle read, the grippers, and the scene's world
+    files. Hashed with the tree, so editing any of them changes a run's config hash."""
+    from hsqbench.config import load_config_data, to_dict
+    from hsqbench.planner.api import resolve_config, resolve_gripper
+    from hsqbench.sim.scene import world_files
+
+    oracles = [config.planners.oracle, *([config.graspability] if config.graspability else [])]
+    named = sorted({config.planners.baselines.planner, *(o.planner_config for o in oracles)})
+    grippers = sorted(
+        {config.planners.hsq.grasp.gripper, *(resolve_config(n).grasp.gripper for n in named)}
+    )
+    return {
+        "planner_configs": {n: load_config_data(n) for n in named},
+        "grippers": {g: to_dict(resolve_gripper(g)) for g in grippers},
+        "scene_world": world_files(config.scene),
+    }

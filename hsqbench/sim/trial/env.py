@@ -80,9 +80,7 @@ class TrialEnv:
         config: TrialConfig,
         recorder: Recorder | None = None,
     ) -> TrialEnv:
-        from hsqbench.sim.physics import load_physics_config
-        from hsqbench.sim.robot import load_robot_config
-        from hsqbench.sim.scene import build_scene, load_scene_config
+        from hsqbench.sim.scene import build_scene
 
         if isinstance(objects, str) or (objects is not None and not isinstance(objects, Sequence)):
             objects = [objects]
@@ -91,9 +89,9 @@ class TrialEnv:
             kind,
             resolved,
             seed,
-            scene_config=load_scene_config(config.scene),
-            robot_config=load_robot_config(config.robot),
-            physics_config=load_physics_config(config.physics),
+            scene_config=config.scene,
+            robot_config=config.robot,
+            physics_config=config.physics,
         )
         if resolved is None:
             resolved = [resolve_object(n) for n in info.objects]
@@ -128,13 +126,10 @@ class TrialEnv:
                 self.info.table_top_z,
                 cfg.surface,
             )
-        from hsqbench.sim.perception import Perception, load_perception_config
+        from hsqbench.sim.perception import Perception
 
         return Perception.from_scene(
-            self.model,
-            self.info,
-            rng=self.rngs["perception_calibration"],
-            config=load_perception_config(cfg.perception),
+            self.model, self.info, rng=self.rngs["perception_calibration"], config=cfg.perception
         )
 
     def observe(self) -> Any:

@@ -39,6 +39,21 @@ def _planner_name(planner: Any) -> str:
     )
 
 
+def _clear(env: TrialEnv) -> list[str]:
+    """Take the objects in the bin (returned: cleared) and those off the table (not cleared)
+    out of the scene."""
+    cleared = []
+    for name in env.info.objects:
+        if name in env.removed:
+            continue
+        if env.probe.in_bin(env.data, name):
+            cleared.append(name)
+            env.remove(name)
+        elif not env.probe.on_table(env.data, name):
+            env.remove(name)
+    return cleared
+
+
 def run_isolated_trial(
     object: str | ObjectLike,
     seed: int,
@@ -79,7 +94,9 @@ def run_packed_round(
     traces: list[AttemptTrace] | None = None,
 ) -> RoundResult:
     """A packed round: the objects placed apart (drawn by seed when ``objects`` is None), then
-    attempts until no object is left on the table or ``max_consecutive_failures`` in a row.
+    attempts until the stop rule (:mod:`hsqbench.sim.stop_rule`, ``packed:`` of the config)
+    ends it: no object left on the table, ``max_consecutive_failures`` in a row, the attempt
+    cap, or an unstable simulation.
 
     Objects in the bin after an attempt are cleared; objects that fell off the table are removed
     but not cleared. ``h_delta`` is off (``PlanningContext.packed``).
@@ -89,16 +106,15 @@ def run_packed_round(
     attempts: list[Attempt] = []
     cleared: list[str] = []
     graspable: list[str] | None = None
+    outcomes: list[str] = []
     with TrialEnv.build("packed", objects, seed, cfg, recorder) as env:
-        failures = 0
-        for i in range(cfg.packed.max_attempts):
-            if not env.objects_on_table():
-                break
+        while cfg.packed.stop_reason(outcomes, bool(env.objects_on_table())) is None:
             attempt, trace = run_attempt(env, plan, packed=True)
-            if i == 0:
+            if not attempts:
                 trace.scene_build_s = env.info.build_time_s
                 graspable = trace.graspable_objects
             attempts.append(attempt)
+            outcomes.append(attempt.outcome.value)
             if traces is not None:
                 traces.append(trace)
             if attempt.outcome == Outcome.SIM_UNSTABLE:
@@ -108,17 +124,7 @@ def run_packed_round(
             except SimUnstable as exc:
                 attempt.detail += f"; then the simulation became unstable going home: {exc}"
                 break
-            for name in env.info.objects:
-                if name in env.removed:
-                    continue
-                if env.probe.in_bin(env.data, name):
-                    cleared.append(name)
-                    env.remove(name)
-                elif not env.probe.on_table(env.data, name):
-                    env.remove(name)
-            failures = 0 if attempt.success else failures + 1
-            if failures >= cfg.packed.max_consecutive_failures:
-                break
+            cleared += _clear(env)
         names = list(env.info.objects)
     return RoundResult(
         objects=names,
