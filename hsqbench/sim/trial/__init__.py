@@ -18,7 +18,12 @@ One attempt (:func:`run_attempt`):
    joint-space move is executed. None executable: ``unreachable``.
 4. **Execute** (:mod:`hsqbench.sim.motion`): joint-space move to the hover pose or pre-grasp;
    vertical descent; straight approach; close with the 70 N hand; lift; carry (mostly a turn of
-   the base joint) above the bin; lower; open. Judged on the way (:mod:`hsqbench.sim.judge`):
+   the base joint) above the bin; lower; open. The carry and the lowering are re-solved for where
+   the object really is in the hand and checked as the approach was (no robot part too near the
+   table or bin along them): a carry that fails the check ends the attempt as ``unreachable``
+   with the object held (never a silent fallback to the planned pose); a lowering that fails
+   it is not run, the hand opens over the bin from higher up, and the detail says so. The phases are
+   :data:`~hsqbench.sim.trial.execution.PHASES`. Judged on the way (:mod:`hsqbench.sim.judge`):
 
    - ``collision_on_approach``: before the fingers close, the robot presses the table or bin
      (``table_contact_force_n``), or pushes an object (``object_contact_force_n``) farther than

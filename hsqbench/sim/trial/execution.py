@@ -16,7 +16,7 @@ from hsqbench.sim.motion import JointTrajectory, joint_move_duration, line_durat
 from hsqbench.sim.outcome import Outcome
 from hsqbench.sim.trial.env import TrialEnv
 from hsqbench.sim.trial.geometry import carry_pose
-from hsqbench.sim.trial.planning import GraspMotion
+from hsqbench.sim.trial.planning import GraspMotion, sweep_problem
 
 #: A lowering shorter than this is skipped: the object is already at its release height, metres.
 MIN_LOWERING_M = 0.01
@@ -116,23 +116,32 @@ def _lift(x: _Execution) -> Verdict:
 
 
 def _carry(x: _Execution) -> Verdict:
-    """Centre the held object over the bin (its actual position in the hand)."""
+    """Centre the held object over the bin (its actual position in the hand): the carry pose
+    re-solved for it and checked like every planned motion (:func:`sweep_problem`); a carry
+    that cannot be solved or would sweep the arm into the table or bin is ``unreachable``."""
     env, d, panda = x.env, x.env.data, x.env.panda
     env.ik.sync(d)
     lifted = Pose(*panda.tcp_pose(d))
     carry, _ = carry_pose(env.bin_centre_xy(), lifted, env.probe.position(d, x.target)[:2])
     sol = env.ik.solve(carry, x.motion.q_carry, env.rngs["ik"], restarts=1)
-    q_carry = sol.q if sol.ok else x.motion.q_carry
-    reason = env.stepper.move_joints(q_carry, (x.hold,))
+    if not sol.ok:
+        return Outcome.UNREACHABLE, x.target, f"carry over the bin: {sol.reason}"
+    if problem := sweep_problem(env, panda.arm_q(d), sol.q):
+        return Outcome.UNREACHABLE, x.target, f"carry over the bin: {problem}"
+    reason = env.stepper.move_joints(sol.q, (x.hold,))
     if reason:
         return Outcome.DROPPED, x.target, f"during the carry: {reason}"
     return None
 
 
 def _release(x: _Execution) -> Verdict:
-    """Lower the object toward the bin floor, open, and judge where it came to rest."""
+    """Lower the object toward the bin floor on a checked vertical line, open, and judge where
+    the object came to rest. A lowering that cannot be solved or would sweep the arm into the
+    bin is not run: the hand opens where it is, over the bin (a higher drop, not a failure),
+    and the detail says so."""
     env, d, panda, probe = x.env, x.env.data, x.env.panda, x.env.probe
     cfg = env.config
+    note = ""
     drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
     if drop > MIN_LOWERING_M:
         env.ik.sync(d)
@@ -143,17 +152,21 @@ def _release(x: _Execution) -> Verdict:
             cfg.execution.lift_segments,
             panda.arm_q(d),
         )
-        if path.ok:
-            waypoints = np.vstack([panda.arm_q(d), path.q[1:]])
-            reason = env.stepper.follow(_line_trajectory(env, waypoints, drop, "lift"), (x.hold,))
+        waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
+        problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
+        if problem:
+            note = f" (released {drop * 100:.0f} cm higher: lowering {problem})"
+        else:
+            traj = _line_trajectory(env, waypoints, drop, "lift")
+            reason = env.stepper.follow(traj, (x.hold,))
             if reason:
                 return Outcome.DROPPED, x.target, f"lowering into the bin: {reason}"
     env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
     env.stepper.hold(cfg.motion.fall_time_s)
     if probe.in_bin(d, x.target):
-        return Outcome.SUCCESS, x.target, "in the bin"
+        return Outcome.SUCCESS, x.target, "in the bin" + note
     where = probe.position(d, x.target).round(3).tolist()
-    return Outcome.DROPPED, x.target, f"released but not in the bin (at {where} m)"
+    return Outcome.DROPPED, x.target, f"released but not in the bin (at {where} m){note}"
 
 
 #: The phases in order, by the names the stepper, the recorder and the phase times use.

@@ -169,12 +169,12 @@ def _motion_problem(
         ("carry", (motion.lift[-1], motion.q_carry)),
     ]
     for name, waypoints in checks:
-        if len(waypoints) > 1 and (problem := _sweep_problem(env, *waypoints)):
+        if len(waypoints) > 1 and (problem := sweep_problem(env, *waypoints)):
             return f"{name}: {problem}"
     return _cloud_problem(env, cloud, (q_now, motion.q_first), motion.descent)
 
 
-def _sweep_problem(env: TrialEnv, *waypoints: NDArray[np.float64]) -> str:
+def sweep_problem(env: TrialEnv, *waypoints: NDArray[np.float64]) -> str:
     """Why the motion through joint ``waypoints`` (two: a joint-space move; more: a line's IK
     waypoints) is unsafe, a robot part coming closer to the table or bin than it may anywhere
     along the path the trajectory follows; ``""`` when it is safe."""
