@@ -17,7 +17,7 @@ CLASSES = {
     "baselines": "hsqbench.planner.baselines.config:BaselinesConfig",
     "contact_graspnet": "hsqbench.planner.learned.config:ContactGraspNetConfig",
     "gripper": "hsqbench.planner.gripper:GripperModel",
-    "hold": "hsqbench.sim.hold:HoldConfig",
+    "hold": "tests.hold_rig:HoldConfig",
     "oracle": "hsqbench.planner.oracle:OracleConfig",
     "perception": "hsqbench.sim.perception:PerceptionConfig",
     "physics": "hsqbench.sim.physics:PhysicsConfig",

@@ -10,7 +10,6 @@ import pandas as pd
 import pytest
 
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.report import (
     GSR_PLOT,
     OUTCOMES_PLOT,
@@ -21,6 +20,7 @@ from hsqbench.experiment.report import (
 )
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.experiment.stats import wilson_interval
+from tests.fake_backend import FakeBackend
 
 CONFIG = ExperimentConfig(
     planners=("hsq", "antipodal"),

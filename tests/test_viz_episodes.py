@@ -7,10 +7,10 @@ import pytest
 
 from hsqbench.config import from_dict
 from hsqbench.experiment.config import ExperimentConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.viz.episodes import choose_trials, record_run, run_trial_config
 from hsqbench.viz.rrd import read_recording
+from tests.fake_backend import FakeBackend
 
 
 def _config(objects, attempts, packed=False, trial_config="trial") -> ExperimentConfig:

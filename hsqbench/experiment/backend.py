@@ -2,7 +2,7 @@
 
 The default backend, :class:`SimBackend`, calls the MuJoCo trial runner
 (``hsqbench.sim.trial.run_isolated_trial`` / ``run_packed_round``), imported lazily in the
-worker. Tests inject a fake backend (:mod:`hsqbench.experiment.fake_backend`). A backend must be
+worker. Tests inject a fake backend (:mod:`tests.fake_backend`). A backend must be
 picklable (it is sent to worker processes) and deterministic for a given trial seed.
 
 :func:`execute_trial` wraps a call: any exception raised by the backend becomes an *error* record
