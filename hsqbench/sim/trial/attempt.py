@@ -113,7 +113,7 @@ def plan_motions(env: TrialEnv, grasps: Any, points: Any, trace: AttemptTrace) -
     clear_z = float(points[:, 2].max()) + ex.hover_clearance_m
     cloud = voxel_downsample(points, ex.cloud_voxel_m).points
     reasons: list[str] = []
-    for r in distinct_in_order(grasps, env.config.max_ranks):
+    for r in distinct_in_order(grasps, env.config.max_ranks, env.config.ordering):
         motion, reason = plan_motion(env, grasps[r], clear_z, cloud)
         trace.ranks_tried += 1
         if motion is not None:

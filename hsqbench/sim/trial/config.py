@@ -20,6 +20,7 @@ from hsqbench.sim.robot import RobotConfig
 from hsqbench.sim.scene import SceneConfig
 from hsqbench.sim.stop_rule import PackedConfig
 from hsqbench.sim.surface_sensor import SurfaceSensorConfig
+from hsqbench.sim.trial.ordering import OrderingConfig
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,12 @@ class ExecutionConfig:
         release_height_m: height of the object's bottom above the bin floor at release.
         retreat_height_m: TCP rise before returning home after an attempt (packed rounds).
         release_gap_m: the hand has let go when it is this much wider than when it held.
+        nudge_extra_m: added to a table nudge so the raised grasp clears the clearance.
+        min_lowering_m: a lowering shorter than this is not run (already at release height).
+        resolve_restarts: IK restarts when a pose is re-solved during execution (the carry
+            for the object's real position, the retreat): seeded by the plan, one suffices.
+        park_xy_m: where removed objects are parked (x, y; object k at x + k), far outside
+            the table, cameras and arm.
     """
 
     pregrasp_distance_m: float = 0.1
@@ -63,6 +70,10 @@ class ExecutionConfig:
     release_height_m: float = 0.03
     retreat_height_m: float = 0.1
     release_gap_m: float = 0.01
+    nudge_extra_m: float = 0.0005
+    min_lowering_m: float = 0.01
+    resolve_restarts: int = 1
+    park_xy_m: tuple[float, float] = (10.0, 10.0)
 
     def __post_init__(self) -> None:
         if self.approach_segments < 1 or self.lift_segments < 1:
@@ -90,7 +101,7 @@ class TrialConfig:
         assets: the object library's build settings (hulls, inertia: they change the physics).
         max_ranks: grasps tried in score order before an attempt is ``unreachable``.
         min_cloud_points: fewer perceived points than this: nothing to grasp.
-        execution, ik, motion, judge, packed: see their classes.
+        ordering, execution, ik, motion, judge, packed: see their classes.
     """
 
     scene: SceneConfig = field(default_factory=SceneConfig)
@@ -105,6 +116,7 @@ class TrialConfig:
     assets: AssetsConfig = field(default_factory=load_assets_config)
     max_ranks: int = 48
     min_cloud_points: int = 30
+    ordering: OrderingConfig = field(default_factory=OrderingConfig)
     execution: ExecutionConfig = field(default_factory=ExecutionConfig)
     ik: IKConfig = field(default_factory=IKConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)

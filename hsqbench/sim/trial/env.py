@@ -20,9 +20,6 @@ from hsqbench.sim.surface_sensor import SurfaceSensor
 from hsqbench.sim.trial.config import TrialConfig
 from hsqbench.sim.trial.geometry import lift_height
 
-#: Where removed objects are parked (metres; far outside the table, cameras and arm).
-PARK_X_M, PARK_Y_M = 10.0, 10.0
-
 #: Independent random streams drawn from a trial's seed.
 STREAMS = ("perception_calibration", "perception_noise", "ik", "planner", "oracle")
 
@@ -200,6 +197,7 @@ class TrialEnv:
         geoms = self.model.geom_bodyid == body
         self.model.geom_contype[geoms] = 0
         self.model.geom_conaffinity[geoms] = 0
-        self.probe.set_free_pose(self.data, name, np.array([PARK_X_M + k, PARK_Y_M, 1.0]))
+        park_x, park_y = self.config.execution.park_xy_m
+        self.probe.set_free_pose(self.data, name, np.array([park_x + k, park_y, 1.0]))
         self.removed.add(name)
         mujoco.mj_forward(self.model, self.data)

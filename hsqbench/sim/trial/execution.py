@@ -18,9 +18,6 @@ from hsqbench.sim.trial.env import TrialEnv
 from hsqbench.sim.trial.geometry import carry_pose
 from hsqbench.sim.trial.planning import GraspMotion, sweep_problem
 
-#: A lowering shorter than this is skipped: the object is already at its release height, metres.
-MIN_LOWERING_M = 0.01
-
 
 @dataclass
 class ExecutionResult:
@@ -123,7 +120,8 @@ def _carry(x: _Execution) -> Verdict:
     env.ik.sync(d)
     lifted = Pose(*panda.tcp_pose(d))
     carry, _ = carry_pose(env.bin_centre_xy(), lifted, env.probe.position(d, x.target)[:2])
-    sol = env.ik.solve(carry, x.motion.q_carry, env.rngs["ik"], restarts=1)
+    restarts = env.config.execution.resolve_restarts
+    sol = env.ik.solve(carry, x.motion.q_carry, env.rngs["ik"], restarts=restarts)
     if not sol.ok:
         return Outcome.UNREACHABLE, x.target, f"carry over the bin: {sol.reason}"
     if problem := sweep_problem(env, panda.arm_q(d), sol.q):
@@ -143,7 +141,7 @@ def _release(x: _Execution) -> Verdict:
     cfg = env.config
     note = ""
     drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
-    if drop > MIN_LOWERING_M:
+    if drop > cfg.execution.min_lowering_m:
         env.ik.sync(d)
         here = Pose(*panda.tcp_pose(d))
         path = env.ik.solve_line(

@@ -15,9 +15,6 @@ from hsqbench.sim.motion import JointTrajectory, joint_move_duration
 from hsqbench.sim.trial.env import TrialEnv
 from hsqbench.sim.trial.geometry import carry_pose, first_pose
 
-#: Added to a table nudge so the raised grasp clears the required distance, metres.
-NUDGE_EXTRA_M = 0.0005
-
 #: Name of the joint-space move to the first pose in reasons.
 MOVE_IN = "move to the first pose"
 
@@ -129,7 +126,7 @@ def plan_motion(
             # hand's meshes differ by a few millimetres; raise the grasp that little.
             deficit = -ik.hand_margin(at_grasp.q)
             if 0 < deficit <= env.config.execution.table_nudge_max_m:
-                p = p.moved([0.0, 0.0, deficit + NUDGE_EXTRA_M])
+                p = p.moved([0.0, 0.0, deficit + env.config.execution.nudge_extra_m])
                 at_grasp = ik.solve(p, q_now, rng, closest_to=q_now)
         if not at_grasp.ok:
             reasons.append(f"{label}: grasp pose {at_grasp.reason}")

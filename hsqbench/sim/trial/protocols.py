@@ -24,7 +24,9 @@ def _return_home(env: TrialEnv) -> None:
     env.ik.sync(d)
     here = Pose(*panda.tcp_pose(d))
     up = env.ik.solve(
-        here.moved([0.0, 0.0, env.config.execution.retreat_height_m]), panda.arm_q(d), restarts=1
+        here.moved([0.0, 0.0, env.config.execution.retreat_height_m]),
+        panda.arm_q(d),
+        restarts=env.config.execution.resolve_restarts,
     )
     if up.ok:
         st.move_joints(up.q, settle=False)
