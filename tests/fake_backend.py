@@ -66,7 +66,8 @@ class FakeBackend:
             "success": dict(sorted(self.success.items())),
             "default_success": self.default_success,
             "unplaceable": [list(g) for g in self.unplaceable],
-            "trial_config": {"packed": dataclasses.asdict(self.stop_rule)},
+            # Where the report finds the stop rule (a sim run has it in its trial config).
+            "packed": dataclasses.asdict(self.stop_rule),
         }
 
     def check(self, planners: tuple[str, ...]) -> None:

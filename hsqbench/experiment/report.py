@@ -138,7 +138,8 @@ def _stop_rule_violations(attempts: pd.DataFrame, rounds: pd.DataFrame, meta: di
     from hsqbench.config import from_dict
     from hsqbench.sim.stop_rule import PackedConfig
 
-    stored = (meta.get("backend") or {}).get("trial_config", {}).get("packed")
+    backend = meta.get("backend") or {}
+    stored = (backend.get("trial_config") or {}).get("packed", backend.get("packed"))
     rule = from_dict(PackedConfig, stored) if isinstance(stored, dict) else PackedConfig()
     count = 0
     ok_rounds = rounds[rounds["status"] == STATUS_OK]
