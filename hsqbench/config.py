@@ -184,16 +184,20 @@ def expand_names(cls: Any, data: dict[str, Any], where: str = "") -> dict[str, A
 
 
 def apply_overrides(data: dict[str, Any], overrides: dict[str, Any] | None) -> dict[str, Any]:
-    """``data`` with ``{"dotted.path": value}`` set (e.g. ``perception.tof.sigma_quad_per_m``);
-    every step but the last must already be a mapping, so a typo is an error naming it."""
+    """``data`` with ``{"dotted.path": value}`` set (e.g. ``perception.tof.sigma_quad_per_m``).
+    A section the file leaves at its defaults is created; a step that holds a value, not a
+    section, is an error naming it, and a misspelt key is caught when the dataclasses are built
+    (unknown keys are errors)."""
     out = json.loads(json.dumps(data, default=list))
     for path, value in (overrides or {}).items():
         *parents, leaf = path.split(".")
         node = out
         for i, key in enumerate(parents):
-            if not isinstance(node.get(key), dict):
+            node.setdefault(key, {})
+            if not isinstance(node[key], dict):
                 raise ConfigError(
-                    f"override {path!r}: {'.'.join(parents[: i + 1])} is not a config section"
+                    f"override {path!r}: {'.'.join(parents[: i + 1])} is a value, not a config "
+                    "section"
                 )
             node = node[key]
         node[leaf] = value
