@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from hsqbench.assets.config import AssetsConfig, load_assets_config
-from hsqbench.config import load_tree
+from hsqbench.config import ConfigError, expand_names, from_dict, load_tree
 from hsqbench.planner.configs import PlannerConfigs
 from hsqbench.planner.oracle import OracleConfig
 from hsqbench.sim.ik import IKConfig
@@ -140,6 +140,20 @@ def load_trial_config(
             raise ValueError("overrides need a config file to apply to")
         return TrialConfig()
     return load_tree(TrialConfig, path, overrides)
+
+
+def trial_config_from_record(data: dict[str, Any], where: str = "run.json") -> TrialConfig:
+    """The config tree a run recorded (``backend.trial_config`` of its ``run.json``), for a
+    replay. Runs made before the tree recorded names (``scene: scene``: loaded from today's
+    files) and ``planner_config: null`` (each planner's own config: today's ``planners:``)."""
+    data = dict(data)
+    old = data.pop("planner_config", None)
+    if old is not None:
+        raise ConfigError(
+            f"{where}: planner_config {old!r} was handed to every planner (a run made before "
+            "the per-planner map); replay it with a trial config whose planners: names it"
+        )
+    return from_dict(TrialConfig, expand_names(TrialConfig, data), where)
 
 
 def named_inputs(config: TrialConfig) -> dict[str, Any]:
