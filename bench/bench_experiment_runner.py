@@ -10,6 +10,12 @@ is negligible. Run: ``.venv/bin/python bench/bench_experiment_runner.py``.
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path as _Path
+
+# The test scaffolding (tests/fake_backend.py, tests/hold_rig.py) lives with the tests.
+sys.path.insert(0, str(_Path(__file__).resolve().parents[1]))
+
 import tempfile
 import time
 import warnings
@@ -17,9 +23,9 @@ from pathlib import Path
 
 from hsqbench.experiment.config import load_experiment_config
 from hsqbench.experiment.executor import LocalExecutor, SerialExecutor
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.report import write_report
 from hsqbench.experiment.runner import run_benchmark
+from tests.fake_backend import FakeBackend
 
 
 def main() -> None:

@@ -10,6 +10,12 @@ Objects must be built already or are built on first use (see bench_assets.py).
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path as _Path
+
+# The test scaffolding (tests/fake_backend.py, tests/hold_rig.py) lives with the tests.
+sys.path.insert(0, str(_Path(__file__).resolve().parents[1]))
+
 import argparse
 import time
 
@@ -24,8 +30,8 @@ def main() -> int:
 
     from hsqbench.assets.library import get_object, ycb_names
     from hsqbench.settings import ycb_dir
-    from hsqbench.sim.hold import find_top_down_grasp, run_hold_test
     from hsqbench.sim.scene import build_scene
+    from tests.hold_rig import find_top_down_grasp, run_hold_test
 
     have_ycb = ycb_dir(required=False) is not None
     fallback = ["proc_box", "proc_cylinder", "proc_l", "proc_mug", "proc_sphere"]

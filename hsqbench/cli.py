@@ -19,6 +19,31 @@ class CommandError(RuntimeError):
     """A user-facing error: printed as ``hsqbench: error: ...`` with exit code 2."""
 
 
+def user_errors() -> tuple[type[BaseException], ...]:
+    """The exceptions that report a problem with the user's input, files or set-up (printed as
+    one line, exit 2). ``ValueError`` is among them: every input check raises it, with a
+    message naming the problem and the fix. Anything else (a ``RuntimeError``, ``KeyError``,
+    ``TypeError``, ...) is a bug in hsqbench and keeps its traceback."""
+    from hsqbench.assets.build import AssetError
+    from hsqbench.assets.download import DownloadError
+    from hsqbench.experiment.backend import TrialRunnerUnavailable
+    from hsqbench.experiment.results import ResultsError
+    from hsqbench.planner.learned.network import LearnedExtraMissing
+    from hsqbench.settings import SettingError
+
+    return (
+        CommandError,
+        ValueError,
+        FileNotFoundError,
+        AssetError,
+        DownloadError,
+        TrialRunnerUnavailable,
+        ResultsError,
+        LearnedExtraMissing,
+        SettingError,
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="hsqbench",
@@ -41,7 +66,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args._run(args) or 0)
-    except (CommandError, ValueError, FileNotFoundError, RuntimeError) as exc:
+    except Exception as exc:
+        if not isinstance(exc, user_errors()):
+            raise  # an internal error: its traceback is what a bug report needs
         print(f"hsqbench {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

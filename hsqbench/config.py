@@ -42,6 +42,8 @@ def _coerce(value: Any, tp: Any, where: str) -> Any:
     origin = typing.get_origin(tp)
     args = typing.get_args(tp)
     if dataclasses.is_dataclass(tp):
+        if isinstance(value, str):  # a config named where its mapping may stand
+            value = expand_names(tp, load_config_data(value), f"{where} ({value})")
         if not isinstance(value, dict):
             raise ConfigError(f"{where}: expected a mapping, got {type(value).__name__}")
         return from_dict(tp, value, where)
@@ -152,6 +154,49 @@ def load_config_data(name_or_path: str | Path, _chain: tuple[Path, ...] = ()) ->
     return _merge(load_config_data(base, (*_chain, path.resolve())), data)
 
 
+def _config_class(tp: Any) -> Any:
+    """The config dataclass a field holds (``X`` or ``X | None``), or None."""
+    if dataclasses.is_dataclass(tp):
+        return tp
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        found = [a for a in typing.get_args(tp) if dataclasses.is_dataclass(a)]
+        return found[0] if len(found) == 1 else None
+    return None
+
+
+def expand_names(cls: Any, data: dict[str, Any], where: str = "") -> dict[str, Any]:
+    """``data`` for config class ``cls`` with every config *named* where a nested config stands
+    (``scene: scene`` for a ``SceneConfig`` field) replaced by that file's mapping (its
+    ``extends:`` applied), recursively: the whole tree as one mapping, before any dataclass is
+    built, so that overrides (:func:`hsqbench.overrides.apply_overrides`) can reach into any file of it."""
+    hints = typing.get_type_hints(cls)
+    out = dict(data)
+    for name, value in data.items():
+        sub = _config_class(hints.get(name))
+        if sub is None:
+            continue
+        here = f"{where}.{name}" if where else name
+        if isinstance(value, str | Path):
+            out[name] = expand_names(sub, load_config_data(value), f"{here} ({value})")
+        elif isinstance(value, dict):
+            out[name] = expand_names(sub, value, here)
+    return out
+
+
+def load_tree(cls: type[T], name_or_path: str | Path, overrides: dict[str, Any] | None = None) -> T:
+    """THE place where a config tree is loaded: the file (``extends:`` applied), every config
+    it names expanded into it (:func:`expand_names`), ``overrides`` applied to that mapping
+    (:func:`hsqbench.overrides.apply_overrides`: every path checked against the dataclasses),
+    then the dataclasses built, each validating its own values."""
+    from hsqbench.overrides import apply_overrides
+
+    path = resolve_config_path(name_or_path)
+    data = expand_names(cls, load_config_data(path), path.name)
+    if overrides:
+        data = apply_overrides(data, overrides, cls)
+    return from_dict(cls, data, where=path.name)
+
+
 def load_config(cls: type[T], name_or_path: str | Path | None = None) -> T:
     """Load ``cls`` from a YAML file (a name in ``configs/`` or a path); defaults when ``None``.
 
@@ -160,8 +205,7 @@ def load_config(cls: type[T], name_or_path: str | Path | None = None) -> T:
     """
     if name_or_path is None:
         return cls()
-    path = resolve_config_path(name_or_path)
-    return from_dict(cls, load_config_data(path), where=path.name)
+    return load_tree(cls, name_or_path)
 
 
 def to_dict(config: Any) -> dict[str, Any]:

@@ -6,11 +6,11 @@ tree without a new YAML file per value::
     perception.tof.sigma_quad_per_m: 0.002      # a field of a nested config
     robot.pads.friction.0: 0.5                  # an element of a list (0 = sliding friction)
     scene.depth_cameras.names: [cam_left]       # a whole value (here: one camera)
-    perception: perception                      # which file a part of the tree is read from
 
-The trial's config tree is the trial config (``configs/trial.yaml``) with each of its
-:data:`TRIAL_PARTS` (named by file there) replaced by that file's contents; a path's first key
-is a part or one of the trial config's own fields (``execution.lift_height_m``).
+The trial's config tree is the trial config (``configs/trial.yaml``) with every config it names
+by file read in (:func:`hsqbench.config.load_tree`, the one place a tree is loaded and these
+overrides applied); a path's first key is one of its fields (``perception``,
+``execution.lift_height_m``, ``planners.hsq.grasp.max_tilt_deg``).
 
 :func:`apply_overrides` is the one place overrides are applied: every key is checked against the
 dataclass fields (not only the keys the YAML happens to hold), so a typo is an error naming the
@@ -21,26 +21,13 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import importlib
 import json
 import types
 import typing
 from collections.abc import Mapping
-from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
-from hsqbench.config import ConfigError, from_dict, load_config_data, resolve_config_path
-
-T = TypeVar("T")
-
-#: Fields of the trial config that name another config file: the parts of the trial's tree,
-#: each with the module and dataclass that loads it.
-TRIAL_PARTS: dict[str, tuple[str, str]] = {
-    "scene": ("hsqbench.sim.scene", "SceneConfig"),
-    "robot": ("hsqbench.sim.robot", "RobotConfig"),
-    "physics": ("hsqbench.sim.physics", "PhysicsConfig"),
-    "perception": ("hsqbench.sim.perception_config", "PerceptionConfig"),
-}
+from hsqbench.config import ConfigError
 
 
 def _plain(value: Any) -> Any:
@@ -146,56 +133,3 @@ def apply_overrides(
             raise ConfigError(f"override {full!r}: a path is keys joined by '.', e.g. a.b.0")
         _set(out, cls, keys, value, full)
     return out
-
-
-# ---- the trial's config tree -------------------------------------------------------------------
-
-
-def split_overrides(overrides: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, dict]]:
-    """``(own, parts)``: overrides of the trial config's own fields (a part's file name
-    included), and per part the paths below it (without the part's name)."""
-    own: dict[str, Any] = {}
-    parts: dict[str, dict[str, Any]] = {}
-    for path, value in overrides.items():
-        head, _, rest = str(path).partition(".")
-        if head in TRIAL_PARTS and rest:
-            parts.setdefault(head, {})[rest] = value
-        else:
-            own[path] = value
-    return own, parts
-
-
-def part_class(part: str) -> type:
-    module, name = TRIAL_PARTS[part]
-    return getattr(importlib.import_module(module), name)
-
-
-def load_part(name_or_path: str | Path, part: str, overrides: Mapping[str, Any]) -> Any:
-    """A part of the trial's tree (``scene``, ``robot``, ...) loaded from its file with the
-    trial's overrides below ``part.`` applied."""
-    cls = part_class(part)
-    path = resolve_config_path(name_or_path)
-    mine = split_overrides(overrides)[1].get(part, {})
-    data = apply_overrides(load_config_data(path), mine, cls, where=part)
-    return from_dict(cls, data, where=path.name)
-
-
-def load_trial_tree(cls: type[T], name_or_path: str | Path, overrides: Mapping[str, Any]) -> T:
-    """The trial config ``cls`` from its file with ``overrides`` applied: its own fields now,
-    the parts' paths kept in its ``overrides`` field for :func:`load_part` (and checked here, so
-    a bad path fails before any trial runs)."""
-    path = resolve_config_path(name_or_path)
-    data = load_config_data(path)
-    given = {**data.pop("overrides", {}), **dict(overrides)}
-    if not given:
-        return from_dict(cls, data, where=path.name)
-    if "overrides" not in {f.name for f in dataclasses.fields(cls)}:
-        raise ConfigError(f"{cls.__name__} has no 'overrides' field: it cannot take {given}")
-    own, _ = split_overrides(given)
-    data = apply_overrides(data, own, cls)
-    data["overrides"] = given
-    config = from_dict(cls, data, where=path.name)
-    for part in TRIAL_PARTS:
-        if isinstance(getattr(config, part, None), str):
-            load_part(getattr(config, part), part, given)
-    return config

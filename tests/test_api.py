@@ -315,19 +315,29 @@ def test_contacts_no_camera_sees_need_no_support() -> None:
         plan_grasps(points, camera_positions=[1.0, 2.0])
 
 
-def test_context_kwargs_are_accepted_by_every_built_in_plan_function() -> None:
-    """The context hands the same keywords to hsq and the baselines; each must accept them."""
+def test_every_cloud_planner_goes_through_the_one_front_door() -> None:
+    """hsq and the baselines share PlannerBase's plan (validate, clean, time, assemble) and
+    supply only their stages; the function forms take the context's keywords; a cloud that
+    cleaning empties gets the same answer from each, under its own name."""
     import inspect
 
-    from hsqbench.planner.baselines.antipodal import plan_antipodal
-    from hsqbench.planner.baselines.single_sq import plan_single_sq
+    from hsqbench.planner.base import PlannerBase
+    from hsqbench.planner.baselines.antipodal import AntipodalPlanner, plan_antipodal
+    from hsqbench.planner.baselines.single_sq import SingleSQPlanner, plan_single_sq
 
-    cameras = np.array([[0.6, 0.8, 0.5]])
-    context = PlanningContext(
-        support_plane=(0, 0, 1, 0), packed=True, seed=4, camera_positions=cameras
-    )
-    kwargs = context.plan_kwargs()
-    assert kwargs["packed"] and kwargs["seed"] == 4 and kwargs["camera_positions"] is cameras
+    for cls in (HSQPlanner, SingleSQPlanner, AntipodalPlanner):
+        assert issubclass(cls, PlannerBase) and "plan" not in vars(cls), cls.__name__
+    keywords = {"packed", "support_plane", "seed", "camera_positions"}
     for fn in (plan_grasps, plan_single_sq, plan_antipodal):
-        params = inspect.signature(fn).parameters
-        assert set(kwargs) <= set(params), fn.__name__
+        assert keywords <= set(inspect.signature(fn).parameters), fn.__name__
+    scattered = np.arange(15, dtype=float).reshape(5, 3)  # five points metres apart: outliers
+    context = PlanningContext(support_plane=(0, 0, 1, 0), seed=3)
+    results = [
+        cls().plan(scattered, context) for cls in (HSQPlanner, SingleSQPlanner, AntipodalPlanner)
+    ]
+    assert [r.planner for r in results] == ["hsq", "single-sq", "antipodal"]
+    for r in results:
+        assert not r.grasps and r.n_removed == 5 and list(r.timings) == ["cleaning", "total"]
+        assert r.reason == results[0].reason and r.reason
+    with pytest.raises(ValueError, match="NaN"):
+        SingleSQPlanner().plan(np.full((4, 3), np.nan), context)

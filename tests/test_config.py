@@ -74,3 +74,20 @@ def test_extends_loop_and_bad_value_are_errors(tmp_path) -> None:
     a.write_text("extends: [x, y]\n")
     with pytest.raises(ConfigError, match="must name one config"):
         load_config(Outer, a)
+
+
+def test_load_tree_expands_named_configs_and_applies_overrides(tmp_path) -> None:
+    """A nested config given by name is that file's mapping; overrides reach into it, also
+    into keys the file leaves at their defaults, before the dataclasses are built."""
+    from hsqbench.config import load_tree
+
+    (tmp_path / "inner.yaml").write_text("spacing_m: 0.002\n")
+    (tmp_path / "outer.yaml").write_text(f"inner: {tmp_path / 'inner.yaml'}\niterations: 3\n")
+    tree = load_tree(Outer, tmp_path / "outer.yaml")
+    assert tree == Outer(iterations=3, inner=Inner(spacing_m=0.002))
+    moved = load_tree(Outer, tmp_path / "outer.yaml", {"inner.names": ["b", "c"]})
+    assert moved.inner == Inner(spacing_m=0.002, names=("b", "c"))
+    with pytest.raises(ConfigError, match="unknown key"):
+        load_tree(Outer, tmp_path / "outer.yaml", {"inner.nothing": 1})
+    with pytest.raises(ConfigError, match="is a value"):
+        load_tree(Outer, tmp_path / "outer.yaml", {"iterations.x": 1})

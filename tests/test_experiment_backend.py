@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pickle
 import sys
 import types
 from dataclasses import dataclass
@@ -78,9 +79,11 @@ def test_missing_or_incomplete_trial_runner(monkeypatch) -> None:
         SimBackend().check(("hsq",))
 
 
-def test_fingerprint_follows_the_contents_of_the_configs_the_trial_names(tmp_path) -> None:
-    """Editing a config the trial config names (here the scene) changes the fingerprint, and
-    so the run's config hash; the planners' and the object library's configs are in it too."""
+def test_fingerprint_is_the_resolved_tree_and_follows_every_named_config(tmp_path) -> None:
+    """The fingerprint holds the resolved trial config tree: editing a config the trial config
+    names (here the scene) changes it, and so the run's config hash; every planner's config,
+    the oracle's and the object library's are in it, and the files named below config level
+    (grippers, world files) too."""
     from hsqbench.settings import CONFIG_DIR
 
     scene = tmp_path / "scene.yaml"
@@ -89,12 +92,31 @@ def test_fingerprint_follows_the_contents_of_the_configs_the_trial_names(tmp_pat
     trial = tmp_path / "trial.yaml"
     trial.write_text(f"scene: {scene}\n")
     before = SimBackend(str(trial)).fingerprint()
-    assert {"scene", "robot", "physics", "perception", "planner", "baselines", "gripper"} <= set(
-        before["configs"]
-    )
-    assert "assets" in before["configs"]
+    tree = before["trial_config"]
+    assert {"scene", "robot", "physics", "perception", "graspability", "assets"} <= set(tree)
+    assert set(tree["planners"]) == {"hsq", "baselines", "oracle", "contact_graspnet"}
+    assert tree["planners"]["hsq"]["grasp"]["gripper"] in before["named_inputs"]["grippers"]
+    assert before["named_inputs"]["scene_world"]
     assert SimBackend(str(trial)).fingerprint() == before
     scene.write_text(text.replace("margin_m: 0.02 ", "margin_m: 0.03 "))
     after = SimBackend(str(trial)).fingerprint()
-    assert after["configs"]["scene"] != before["configs"]["scene"]
-    assert after["trial_config"] == before["trial_config"]  # the trial config itself is unchanged
+    assert after["trial_config"]["scene"] != before["trial_config"]["scene"]
+    assert after["trial_config"]["robot"] == before["trial_config"]["robot"]
+
+
+def test_overrides_reach_into_named_configs_and_change_the_fingerprint() -> None:
+    """Overrides (dotted paths into the tree's data) apply before the dataclasses are built, in
+    any named file; a path that is not in the tree is an error naming it."""
+    from hsqbench.config import ConfigError
+
+    base = SimBackend("trial").fingerprint()
+    friction = base["trial_config"]["physics"]["objects"]["friction"]
+    moved = SimBackend("trial", overrides=(("physics.objects.condim", 6),))
+    assert moved.fingerprint()["trial_config"]["physics"]["objects"]["condim"] == 6
+    assert moved.fingerprint()["trial_config"]["physics"]["objects"]["friction"] == friction
+    assert moved.fingerprint() != base
+    assert pickle.loads(pickle.dumps(moved)).fingerprint() == moved.fingerprint()
+    with pytest.raises(ConfigError, match=r"unknown key\(s\) \['nothing'\]"):
+        SimBackend("trial", overrides=(("physics.nothing.here", 1),)).fingerprint()
+    with pytest.raises(ConfigError, match=r"physics\.timestep_s is a value"):
+        SimBackend("trial", overrides=(("physics.timestep_s.x", 1),)).fingerprint()

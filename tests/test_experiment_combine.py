@@ -8,9 +8,9 @@ import pytest
 
 from hsqbench.experiment.combine import RunMismatch
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.report import load_run, table1, write_report
 from hsqbench.experiment.runner import run_benchmark
+from tests.fake_backend import FakeBackend
 
 CONFIG = ExperimentConfig(
     planners=("hsq", "antipodal"),

@@ -19,10 +19,10 @@ from hsqbench.experiment.executor import (
     forwarded_settings,
     make_executor,
 )
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.results import VOLATILE_COLUMNS, load_results
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.experiment.seeds import build_trials
+from tests.fake_backend import FakeBackend
 
 # Trials that take a moment, so the second worker always gets some: with instant trials one
 # worker could finish them all before the other has started on a loaded machine.

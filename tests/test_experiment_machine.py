@@ -6,9 +6,9 @@ import json
 from importlib import metadata
 
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.machine import _requirement_name, machine_info, package_versions
 from hsqbench.experiment.runner import run_benchmark
+from tests.fake_backend import FakeBackend
 
 
 def test_requirement_names_drop_versions_markers_and_comments() -> None:

@@ -10,11 +10,11 @@ import pandas as pd
 import pytest
 
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig, PileConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.pile_table import CONTEXT, TABLE4_CSV
 from hsqbench.experiment.report import TABLES_MD, write_report
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.experiment.stats import wilson_interval
+from tests.fake_backend import FakeBackend
 
 OBJECTS = ("mug", "bowl", "pear", "banana", "apple")
 CONFIG = ExperimentConfig(

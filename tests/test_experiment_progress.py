@@ -5,9 +5,9 @@ from __future__ import annotations
 import io
 
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.progress import RunProgress, Tally, format_duration
 from hsqbench.experiment.runner import run_benchmark
+from tests.fake_backend import FakeBackend
 
 
 class _Clock:

@@ -6,10 +6,10 @@ import csv
 import warnings
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.report import (
     GSR_PLOT,
     OUTCOMES_PLOT,
@@ -20,6 +20,7 @@ from hsqbench.experiment.report import (
 )
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.experiment.stats import wilson_interval
+from tests.fake_backend import FakeBackend
 
 CONFIG = ExperimentConfig(
     planners=("hsq", "antipodal"),
@@ -166,3 +167,22 @@ def test_report_flags_rounds_that_break_the_stop_rule(tmp_path: Path) -> None:
     run_benchmark(config, tmp_path / "fine", backend=FakeBackend(), progress=False)
     write_report(tmp_path / "fine")
     assert "stop rule" not in (tmp_path / "fine" / "tables.md").read_text()
+
+
+def test_report_reads_the_runs_own_stop_rule_and_accepts_the_attempt_cap(tmp_path: Path) -> None:
+    """A round that the attempt cap ends, objects left and no two failures in a row, follows
+    the rule: the report checks it against the run's stop rule (stored in run.json), so it is
+    not flagged."""
+    from hsqbench.sim.stop_rule import PackedConfig as StopRule
+
+    config = ExperimentConfig(
+        planners=("hsq",),
+        isolated=IsolatedConfig(enabled=False),
+        packed=PackedConfig(objects=("mug", "bowl", "pear"), rounds=3, objects_per_round=3),
+    )
+    capped = FakeBackend(default_success=0.3, stop_rule=StopRule(5, max_attempts=2))
+    run_benchmark(config, tmp_path / "capped", backend=capped, progress=False)
+    write_report(tmp_path / "capped")
+    assert "stop rule" not in (tmp_path / "capped" / "tables.md").read_text()
+    rounds = pd.read_csv(tmp_path / "capped" / "rounds.csv")
+    assert (rounds["n_attempts"] == 2).all() and (rounds["n_cleared"] < 3).all()  # at the cap

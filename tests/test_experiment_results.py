@@ -9,7 +9,6 @@ import math
 import pytest
 
 from hsqbench.experiment.backend import TrialRun, execute_trial
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.results import (
     ATTEMPT_COLUMNS,
     ROUND_COLUMNS,
@@ -19,6 +18,7 @@ from hsqbench.experiment.results import (
     rows_for,
 )
 from hsqbench.experiment.seeds import TrialSpec
+from tests.fake_backend import FakeBackend
 
 ISO = TrialSpec("isolated", "hsq", 0, 2, ("mug",), 1234)
 PACKED = TrialSpec("packed", "hsq", 0, 1, ("mug", "bowl", "apple"), 99)

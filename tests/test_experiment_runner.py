@@ -13,10 +13,10 @@ from pathlib import Path
 import pytest
 
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.results import ResultsError, load_results
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.experiment.seeds import build_trials
+from tests.fake_backend import FakeBackend
 
 SMALL = ExperimentConfig(
     planners=("a", "b"),
@@ -96,7 +96,7 @@ def test_killed_process_resumes_and_drops_a_partial_line(tmp_path) -> None:
     script = textwrap.dedent(
         f"""
         from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-        from hsqbench.experiment.fake_backend import FakeBackend
+        from tests.fake_backend import FakeBackend
         from hsqbench.experiment.runner import run_benchmark
         config = ExperimentConfig(
             planners=("a", "b"),

@@ -11,7 +11,6 @@ import pandas as pd
 import pytest
 
 from hsqbench.config import ConfigError
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.results import load_results
 from hsqbench.experiment.stats import Rate
 from hsqbench.experiment.sweep import CSV_FILE, SWEEP_FILE, point_config, run_sweep
@@ -22,6 +21,7 @@ from hsqbench.experiment.sweep_config import (
     SweepProtocol,
     load_sweep_config,
 )
+from tests.fake_backend import FakeBackend
 
 PROTOCOL = """
 planners: [a, b]
@@ -137,15 +137,14 @@ def test_sweep_config_errors_name_the_problem():
 
 @pytest.mark.parametrize("name", ["depth_noise", "calibration", "cameras", "pad_friction"])
 def test_built_in_sweeps_load_and_every_point_is_a_valid_trial_config(name):
-    from hsqbench.overrides import load_trial_tree
-    from hsqbench.sim.trial import TrialConfig
+    from hsqbench.sim.trial import load_trial_config
 
     sweep = load_sweep_config(name)
     assert [p.config for p in sweep.protocols] == ["paper", "ycb"]
     for proto in sweep.protocols:
         config = point_config(proto, sweep)
         for point in sweep.parameters[0].points:
-            load_trial_tree(TrialConfig, config.trial_config, point.overrides)
+            load_trial_config(config.trial_config, point.overrides or None)
     assert any(not p.overrides for p in sweep.parameters[0].points)  # today's setting is a point
 
 
@@ -172,7 +171,9 @@ def test_a_bad_override_fails_before_anything_is_written(tmp_path, sweep):
     bad = replace(
         sweep, parameters=(SweepParameter(name="x", path="perception.tof.sigma", values=(1.0,)),)
     )
-    with pytest.raises(ConfigError, match=r"'sigma' is not a key of tof.*sigma_quad_per_m"):
+    with pytest.raises(
+        ConfigError, match=r"'sigma' is not a key of perception\.tof.*sigma_quad_per_m"
+    ):
         run_sweep(bad, tmp_path / "sw", progress=False)  # the simulation backend checks it
     assert not (tmp_path / "sw").exists()
     with pytest.raises(ConfigError, match=r"no sweep 'nosuch'.*depth_noise"):

@@ -346,12 +346,12 @@ def test_benchmark_scene_box_is_perceived_without_table_or_robot():
 
 @pytest.mark.parametrize("camera", ["cam_left", "cam_right"])
 def test_single_camera_mode_perceives_with_that_camera_only_and_the_planners_still_plan(camera):
-    from hsqbench.overrides import load_part
     from hsqbench.planner.api import PlanningContext
     from hsqbench.planner.registry import get_planner
     from hsqbench.sim.scene import build_scene
+    from hsqbench.sim.trial import load_trial_config
 
-    scene = load_part("scene", "scene", {"scene.depth_cameras.names": [camera]})
+    scene = load_trial_config("trial", {"scene.depth_cameras.names": [camera]}).scene
     model, data, info = build_scene("isolated", "proc_box", seed=1, scene_config=scene)
     assert info.camera_names == (camera,)
     with Perception.from_scene(model, info, rng=np.random.default_rng(0)) as perception:

@@ -1,5 +1,5 @@
 """The Panda as modified in hsqbench.sim.robot: what changed, what did not, and that the hand
-holds objects (hsqbench.sim.hold)."""
+holds objects (tests.hold_rig)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from hsqbench.assets.config import load_assets_config
-from hsqbench.sim.hold import FinderConfig, GraspSpec, find_top_down_grasp, run_hold_test
 from hsqbench.sim.physics import load_physics_config
 from hsqbench.sim.robot import (
     ARM_ACTUATORS,
@@ -22,6 +21,7 @@ from hsqbench.sim.robot import (
     load_robot_config,
     menagerie_path,
 )
+from tests.hold_rig import FinderConfig, GraspSpec, find_top_down_grasp, run_hold_test
 
 try:
     menagerie_path(load_robot_config())

@@ -302,3 +302,27 @@ def test_packed_round_with_hsq_follows_the_rules_and_is_deterministic(config):
     assert not any(not a and not b for a, b in pairwise(outcomes[:-1]))
     again = run_packed_round(objects, 7, "hsq", config)
     assert _timeless(again) == _timeless(first)
+
+
+def test_post_grasp_motions_are_checked(config, monkeypatch):
+    """After the lift, the carry and the lowering are re-solved for where the object really is
+    and checked like the approach (sweep against table and bin). A carry that fails the check
+    is ``unreachable`` with the object held, never a silent fallback to the plan; a lowering
+    that fails it is not run: the hand opens over the bin, and the detail says so."""
+    from hsqbench.sim.trial import execution
+
+    problem = "link7 would come 1.0 mm from the table or bin at 50% of it"
+    # The lowering (a line: more than two waypoints) fails the check: released from higher up.
+    monkeypatch.setattr(execution, "sweep_problem", lambda env, *w: problem if len(w) > 2 else "")
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    # (Here the line's IK already fails at the bin: the detail names that problem instead.)
+    assert (
+        attempt.detail.startswith("in the bin (released ") and "higher: lowering " in attempt.detail
+    )
+    # The carry (a joint-space move: two waypoints) fails it: unreachable, the box in the hand.
+    monkeypatch.setattr(execution, "sweep_problem", lambda env, *w: problem if len(w) == 2 else "")
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.UNREACHABLE, attempt.detail
+    assert attempt.detail == f"carry over the bin: {problem}"
+    assert attempt.target == "proc_box" and attempt.rank_executed >= 0

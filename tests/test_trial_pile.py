@@ -10,7 +10,8 @@ import pytest
 from hsqbench.planner.api import PlanResult
 from hsqbench.sim.outcome import Outcome
 from hsqbench.sim.robot import load_robot_config, menagerie_path
-from hsqbench.sim.trial import PileRoundConfig, load_trial_config, run_packed_round
+from hsqbench.sim.stop_rule import PackedConfig
+from hsqbench.sim.trial import load_trial_config, run_packed_round
 
 try:
     menagerie_path(load_robot_config())
@@ -40,7 +41,7 @@ def test_a_pile_round_uses_the_packed_rule_on_a_pile(config):
 
 
 def test_stop_on_no_grasp_ends_a_pile_round_at_once_and_leaves_packed_rounds_alone(config):
-    vgn = replace(config, pile=PileRoundConfig(stop_on_no_grasp=True))
+    vgn = replace(config, pile=PackedConfig(stop_on_no_grasp=True))
     pile = run_packed_round(OBJECTS, 5, NoGrasp(), vgn, kind="pile")
     assert [a.outcome for a in pile.attempts] == [Outcome.NO_GRASP_FOUND]
     packed = run_packed_round(OBJECTS, 5, NoGrasp(), vgn)

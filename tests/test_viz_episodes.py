@@ -7,10 +7,10 @@ import pytest
 
 from hsqbench.config import from_dict
 from hsqbench.experiment.config import ExperimentConfig
-from hsqbench.experiment.fake_backend import FakeBackend
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.viz.episodes import choose_trials, record_run, run_trial_config
 from hsqbench.viz.rrd import read_recording
+from tests.fake_backend import FakeBackend
 
 
 def _config(objects, attempts, packed=False, trial_config="trial") -> ExperimentConfig:
@@ -71,3 +71,14 @@ def test_replay_reproduces_the_run_into_a_recording(tmp_path):
     assert episode.path.name == "isolated_hsq_s0_proc_box_000.rrd"
     assert "world/objects/proc_box" in summary.entity_paths
     assert episode.choice.outcomes[0] in summary.texts["outcome"]
+
+
+def test_a_run_made_before_the_config_tree_still_replays() -> None:
+    """results/latest was recorded with config names and planner_config: null; its replay
+    config is today's tree with the recorded values."""
+    from hsqbench.settings import REPO_ROOT
+    from hsqbench.sim.trial import load_trial_config
+
+    old = run_trial_config(REPO_ROOT / "results" / "latest")
+    assert old.planners == load_trial_config().planners
+    assert old.scene == load_trial_config().scene and old.max_ranks == 48

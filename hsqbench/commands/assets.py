@@ -256,7 +256,9 @@ def _download(config, args: argparse.Namespace) -> int:
     for name, why in report.failed.items():
         print(f"  {name}: {why}")
     if report.failed:
-        raise RuntimeError(
+        from hsqbench.cli import CommandError
+
+        raise CommandError(
             f"{len(report.failed)} object(s) failed; run the same command again to retry"
         )
     if args.dest is not None:

@@ -3,7 +3,7 @@
 The default backend, :class:`SimBackend`, calls the MuJoCo trial runner
 (``hsqbench.sim.trial.run_isolated_trial`` / ``run_packed_round``, the latter also for pile
 rounds with ``kind="pile"``), imported lazily in the
-worker. Tests inject a fake backend (:mod:`hsqbench.experiment.fake_backend`). A backend must be
+worker. Tests inject a fake backend (:mod:`tests.fake_backend`). A backend must be
 picklable (it is sent to worker processes) and deterministic for a given trial seed.
 
 :func:`execute_trial` wraps a call: any exception raised by the backend becomes an *error* record
@@ -17,32 +17,13 @@ import os
 import socket
 import time
 import traceback
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 from hsqbench.experiment.seeds import TrialSpec
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
 
 ERROR_DETAIL_CHARS = 600
-
-
-def _config_text(name_or_path: str) -> str:
-    """The resolved contents (``extends:`` applied) of a config given by name or path."""
-    import json
-
-    from hsqbench.config import load_config_data
-
-    return json.dumps(load_config_data(name_or_path), sort_keys=True)
-
-
-def _config_exists(name: str) -> bool:
-    from hsqbench.config import ConfigError, resolve_config_path
-
-    try:
-        resolve_config_path(name)
-    except ConfigError:
-        return False
-    return True
 
 
 class TrialRunnerUnavailable(RuntimeError):
@@ -167,17 +148,19 @@ class SimBackend:
 
     The trial module must provide ``TrialConfig`` (a config dataclass),
     ``run_isolated_trial(object, seed, planner, config)`` and
-    ``run_packed_round(objects, seed, planner, config)``. The config is loaded once per process,
-    with ``overrides`` (dotted paths into the trial's config tree, :mod:`hsqbench.overrides`).
+    ``run_packed_round(objects, seed, planner, config)``; ``load_trial_config(name, overrides)``
+    and ``named_inputs(config)`` where it has them. The config tree is loaded once per process
+    and handed whole to every trial.
     """
 
     trial_config: str = "trial"
     name: str = "sim"
-    overrides: dict[str, Any] = field(default_factory=dict)
+    #: ``(dotted.path, value)`` pairs applied to the trial config tree's data before it is
+    #: built (``hsqbench.sim.trial.load_trial_config``), e.g. for a parameter sweep.
+    overrides: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self) -> None:
         self._config: Any = None
-        self._scene: Any = None
 
     def __getstate__(self) -> dict[str, Any]:
         return {"trial_config": self.trial_config, "name": self.name, "overrides": self.overrides}
@@ -185,9 +168,8 @@ class SimBackend:
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.trial_config = state["trial_config"]
         self.name = state["name"]
-        self.overrides = state.get("overrides", {})
+        self.overrides = tuple(state.get("overrides", ()))
         self._config = None
-        self._scene = None
 
     @staticmethod
     def _module() -> Any:
@@ -214,64 +196,32 @@ class SimBackend:
 
     def _trial_config(self) -> Any:
         if self._config is None:
-            from hsqbench.overrides import load_trial_tree
+            trial = self._module()
+            load = getattr(trial, "load_trial_config", None)
+            if load is None:  # a minimal trial module: its TrialConfig from the file as is
+                from hsqbench.config import load_tree
 
-            self._config = load_trial_tree(
-                self._module().TrialConfig, self.trial_config, self.overrides
-            )
+                self._config = load_tree(
+                    trial.TrialConfig, self.trial_config, dict(self.overrides) or None
+                )
+            else:
+                self._config = load(self.trial_config, dict(self.overrides) or None)
         return self._config
 
     def fingerprint(self) -> dict[str, Any]:
-        """The trial config and the contents of every config it names (scene, robot, physics,
-        perception, the planners' and the object library's), so editing any of them changes
-        the run's config hash and a resume cannot mix results from different settings."""
+        """The resolved trial config tree (every config a trial reads, loaded once: scene,
+        robot, physics, perception, each planner's, the oracle's, the object library's) and
+        the files it names below config level (``named_inputs``), so editing any of them
+        changes the run's config hash and a resume cannot mix results of different settings."""
         from hsqbench.config import to_dict
-        from hsqbench.overrides import TRIAL_PARTS, load_part, part_class
 
         tc = self._trial_config()
         out: dict[str, Any] = {"backend": self.name, "trial_config": to_dict(tc)}
-        given = getattr(tc, "overrides", {})
-        if not given:  # runs without overrides keep the hash they had before overrides existed
-            out["trial_config"].pop("overrides", None)
-        try:
-            from hsqbench.assets.config import load_assets_config
-            from hsqbench.planner.api import resolve_config, resolve_gripper
-            from hsqbench.planner.baselines.config import resolve_baselines_config
-
-            for part in TRIAL_PARTS:
-                part_class(part)
-        except ImportError:
-            return out
-        # Each part as loaded for the trials, the overrides applied.
-        parts = {
-            key: load_part(getattr(tc, key), key, given)
-            for key in TRIAL_PARTS
-            if isinstance(getattr(tc, key, None), str)
-        }
-        contents = {key: to_dict(part) for key, part in parts.items()}
-        # planner_config is handed to every planner; None means each planner's own default.
-        chosen = getattr(tc, "planner_config", None)
-        if chosen is None:
-            planner = resolve_config(None)
-            contents["planner"] = to_dict(planner)
-            contents["baselines"] = to_dict(resolve_baselines_config(None))
-        else:
-            planner = None
-            contents["planner_config_text"] = _config_text(chosen)
-        if planner is not None:
-            contents["gripper"] = to_dict(resolve_gripper(planner.grasp.gripper))
-        contents["assets"] = to_dict(load_assets_config())
-        if isinstance(getattr(tc, "scene", None), str):
-            from hsqbench.sim.scene import world_files
-
-            contents["scene_world"] = world_files(parts["scene"])
-        # The oracle's (graspability and the oracle planner) and the learned planner's own files.
-        if getattr(tc, "graspability", None) is not None:
-            contents["oracle"] = _config_text(tc.graspability)
-        for own in ("oracle", "contact_graspnet"):
-            if own not in contents and _config_exists(own):
-                contents[own] = _config_text(own)
-        out["configs"] = contents
+        named = getattr(self._module(), "named_inputs", None)
+        if named is not None:
+            out["named_inputs"] = named(tc)
+        if self.overrides:  # already in the tree; named too, so run.json says what a point set
+            out["overrides"] = dict(self.overrides)
         return out
 
     def check(self, planners: tuple[str, ...]) -> None:
@@ -302,27 +252,17 @@ class SimBackend:
 
     def placeable(self, objects: tuple[str, ...], seed: int) -> bool:
         """The scene builder's own placement with the trial config's scene, without a model."""
-        from hsqbench.overrides import load_part
         from hsqbench.sim.scene import packed_placeable
 
-        if self._scene is None:
-            tc = self._trial_config()
-            self._scene = load_part(tc.scene, "scene", getattr(tc, "overrides", {}))
-        return packed_placeable(objects, seed, self._scene)
+        return packed_placeable(objects, seed, self._trial_config().scene)
 
     def pile_placeable(self, objects: tuple[str, ...], seed: int) -> bool:
         """The scene builder's own pile drop and checks (a second or two; remembered, so the
         round's trials in this process reuse it) with the trial config's scene, robot, physics."""
-        from hsqbench.overrides import load_part
         from hsqbench.sim.scene import pile_placeable
 
         tc = self._trial_config()
-        overrides = getattr(tc, "overrides", {})
-        if self._scene is None:
-            self._scene = load_part(tc.scene, "scene", overrides)
-        physics = load_part(tc.physics, "physics", overrides)
-        robot = load_part(tc.robot, "robot", overrides)
-        return pile_placeable(objects, seed, self._scene, physics, robot)
+        return pile_placeable(objects, seed, tc.scene, tc.physics, tc.robot)
 
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult:
         return self._module().run_isolated_trial(obj, seed, planner, self._trial_config())

@@ -115,11 +115,12 @@ def load_run(run_dir: str | Path) -> RunData:
     hashes = set(attempts["config_hash"]) if len(attempts) else set()
     if len(hashes) > 1:
         notes.append(f"rows carry {len(hashes)} config hashes {sorted(hashes)}: results mixed")
-    broken = _stop_rule_violations(attempts, rounds)
+    broken = _stop_rule_violations(attempts, rounds, meta)
     if broken:
         notes.append(
-            f"{broken} packed round(s) ended with objects left and without two consecutive "
-            "failures: check the trial runner's stop rule"
+            f"{broken} packed or pile round(s) ended with objects left and without the stop rule's "
+            "reasons (consecutive failures, the attempt cap, an unstable simulation): check the "
+            "trial runner's stop rule, or whether an object fell off the table"
         )
     confidence = float(config.get("confidence", 0.95))
     backend = meta.get("backend", {}).get("backend")
@@ -132,17 +133,25 @@ def load_run(run_dir: str | Path) -> RunData:
     return RunData(attempts, rounds, meta, planners, objects, confidence, notes, measured)
 
 
-def _stop_rule_violations(attempts: pd.DataFrame, rounds: pd.DataFrame) -> int:
-    """Rounds that stopped early: objects left, yet the last two attempts were not failures."""
+def _stop_rule_violations(attempts: pd.DataFrame, rounds: pd.DataFrame, meta: dict) -> int:
+    """Rounds that stopped although the stop rule (:mod:`hsqbench.sim.stop_rule`, with the
+    run's own ``packed:`` or ``pile:`` settings) says they should have gone on: objects left,
+    and none of the rule's reasons (failures in a row, the cap, ...) ended them."""
+    from hsqbench.config import from_dict
+    from hsqbench.sim.stop_rule import PackedConfig
+
+    backend = meta.get("backend") or {}
     count = 0
     ok_rounds = rounds[rounds["status"] == STATUS_OK]
-    packed = attempts[(attempts["experiment"] == "packed") & (attempts["status"] == STATUS_OK)]
-    by_key = {k: g.sort_values("attempt_index") for k, g in packed.groupby("trial_key")}
+    ok = attempts[attempts["status"] == STATUS_OK]
+    by_key = {k: g.sort_values("attempt_index") for k, g in ok.groupby("trial_key")}
     for _, r in ok_rounds.iterrows():
-        if r["n_cleared"] >= r["n_objects"]:
-            continue
+        kind = str(r["trial_key"]).split("/", 1)[0]
+        stored = (backend.get("trial_config") or {}).get(kind, backend.get(kind))
+        rule = from_dict(PackedConfig, stored) if isinstance(stored, dict) else PackedConfig()
         tail = by_key.get(r["trial_key"])
-        if tail is None or len(tail) < 2 or tail["success"].iloc[-2:].sum() > 0:
+        outcomes = [] if tail is None else [str(o) for o in tail["outcome"]]
+        if rule.ended_early(outcomes, objects_left=r["n_cleared"] < r["n_objects"]):
             count += 1
     return count
 

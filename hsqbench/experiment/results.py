@@ -4,7 +4,8 @@ Layout of ``results/<run>/``:
 
 - ``attempts.csv``: one row per grasp attempt (isolated, packed and pile), or one
   ``status=error`` row for a trial that could not run (``attempt_index=-1``, ``n_attempts=0``).
-- ``rounds.csv``: one row per packed or pile round (column ``trial_key`` names which), written *after* the round's attempt rows; its
+- ``rounds.csv``: one row per packed or pile round (``trial_key`` names which), written *after*
+  the round's attempt rows; its
   ``detail`` names the draws rejected before the round's objects, if any (not placeable).
 - ``run.json``: the full config, its hash, code version, machine (host, CPU model, cores, Python
   and the versions of every package hsqbench depends on: :mod:`hsqbench.experiment.machine`), the
@@ -26,211 +27,53 @@ import contextlib
 import csv
 import io
 import json
-import math
 import os
 import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 from hsqbench.experiment.backend import TrialRun
 from hsqbench.experiment.config import ROUND_EXPERIMENTS
-from hsqbench.sim.outcome import RoundResult
-
-ATTEMPTS_FILE = "attempts.csv"
-ROUNDS_FILE = "rounds.csv"
-RUN_FILE = "run.json"
-LOCK_FILE = ".lock"
-
-FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")
-
-ATTEMPT_COLUMNS = (
-    "trial_key",
-    "experiment",
-    "planner",
-    "base_seed",
-    "trial_index",
-    "seed",
-    "objects",
-    "attempt_index",
-    "n_attempts",
-    "status",
-    "outcome",
-    "success",
-    "graspable",
-    "target",
-    "object_pose",
-    "resting_pose",
-    "rank_executed",
-    "n_grasps",
-    "score",
-    *FACTOR_NAMES,
-    "factors",
-    "width_m",
-    "perception_s",
-    "planning_s",
-    "execution_s",
-    "detail",
-    "trial_wall_s",
-    "worker",
-    "config_hash",
-    "code_version",
-    "finished_at",
+from hsqbench.experiment.rows import (
+    ATTEMPT_COLUMNS,
+    ATTEMPTS_FILE,
+    FACTOR_NAMES,
+    LOCK_FILE,
+    ROUND_COLUMNS,
+    ROUNDS_FILE,
+    RUN_FILE,
+    STATUS_ERROR,
+    STATUS_OK,
+    VOLATILE_COLUMNS,
+    rows_for,
 )
 
-ROUND_COLUMNS = (
-    "trial_key",
-    "planner",
-    "base_seed",
-    "trial_index",
-    "seed",
-    "objects",
-    "n_objects",
-    "objects_cleared",
-    "n_cleared",
-    "clearance_rate",
-    "objects_graspable",
-    "n_graspable",
-    "n_attempts",
-    "n_success",
-    "status",
-    "detail",
-    "trial_wall_s",
-    "worker",
-    "config_hash",
-    "code_version",
-    "finished_at",
-)
-
-# Columns that depend on the machine or the moment, not on the trial: ignore them to compare runs.
-VOLATILE_COLUMNS = (
-    "perception_s",
-    "planning_s",
-    "execution_s",
-    "trial_wall_s",
-    "worker",
-    "code_version",
-    "finished_at",
-)
-
-STATUS_OK = "ok"
-STATUS_ERROR = "error"
+__all__ = [
+    "ATTEMPTS_FILE",
+    "ATTEMPT_COLUMNS",
+    "FACTOR_NAMES",
+    "LOCK_FILE",
+    "ROUNDS_FILE",
+    "ROUND_COLUMNS",
+    "RUN_FILE",
+    "STATUS_ERROR",
+    "STATUS_OK",
+    "VOLATILE_COLUMNS",
+    "ResultStore",
+    "ResultsError",
+    "RunResults",
+    "check_consistent",
+    "collect",
+    "load_results",
+    "read_rows",
+    "rows_for",
+]
 
 
 class ResultsError(RuntimeError):
     """A results folder cannot be used as asked (wrong config, damaged file, in use)."""
-
-
-def _fmt(value: Any) -> str:
-    """One CSV field on one line: floats round-trip exactly, NaN is empty."""
-    if value is None:
-        return ""
-    if isinstance(value, bool):
-        return "1" if value else "0"
-    if isinstance(value, float):
-        return "" if math.isnan(value) else repr(value)
-    if isinstance(value, int):
-        return str(value)
-    text = str(value)
-    return text.replace("\r", " ").replace("\n", " | ") if ("\n" in text or "\r" in text) else text
-
-
-def _now() -> str:
-    return datetime.now(UTC).isoformat(timespec="milliseconds")
-
-
-def rows_for(
-    run: TrialRun, config_hash: str, code_version: str, finished_at: str | None = None
-) -> tuple[list[dict[str, str]], dict[str, str] | None]:
-    """The attempt rows and (packed only) the round row of one finished trial."""
-    spec = run.spec
-    finished_at = finished_at or _now()
-    common = {
-        "trial_key": spec.key,
-        "planner": spec.planner,
-        "base_seed": spec.base_seed,
-        "trial_index": spec.index,
-        "seed": spec.seed,
-        "objects": ";".join(spec.objects),
-        "trial_wall_s": run.wall_s,
-        "worker": run.worker,
-        "config_hash": config_hash,
-        "code_version": code_version,
-        "finished_at": finished_at,
-    }
-    result = run.result
-    attempts: list[dict[str, Any]] = []
-    if result is None:
-        attempts.append(
-            {
-                **common,
-                "experiment": spec.experiment,
-                "attempt_index": -1,
-                "n_attempts": 0,
-                "status": STATUS_ERROR,
-                "detail": run.error or "unknown error",
-            }
-        )
-    else:
-        n = len(result.attempts)
-        for i, a in enumerate(result.attempts):
-            attempts.append(
-                {
-                    **common,
-                    "experiment": spec.experiment,
-                    "attempt_index": i,
-                    "n_attempts": n,
-                    "status": STATUS_OK,
-                    "outcome": str(a.outcome),
-                    "success": a.success,
-                    "graspable": a.graspable,
-                    "target": a.target,
-                    "object_pose": " ".join(repr(float(x)) for x in a.object_pose),
-                    "resting_pose": a.resting_pose,
-                    "rank_executed": a.rank_executed,
-                    "n_grasps": a.n_grasps,
-                    "score": float(a.score),
-                    **{k: float(a.factors[k]) for k in FACTOR_NAMES if k in a.factors},
-                    "factors": json.dumps(a.factors, sort_keys=True) if a.factors else "",
-                    "width_m": float(a.width_m),
-                    "perception_s": float(a.perception_s),
-                    "planning_s": float(a.planning_s),
-                    "execution_s": float(a.execution_s),
-                    "detail": a.detail,
-                }
-            )
-    attempt_rows = [{c: _fmt(r.get(c)) for c in ATTEMPT_COLUMNS} for r in attempts]
-    if spec.experiment not in ROUND_EXPERIMENTS:
-        return attempt_rows, None
-    if isinstance(result, RoundResult):
-        round_row: dict[str, Any] = {
-            **common,
-            "n_objects": len(result.objects),
-            "objects_cleared": ";".join(result.objects_cleared),
-            "n_cleared": len(result.objects_cleared),
-            "clearance_rate": result.clearance_rate,
-            "objects_graspable": (
-                None if result.objects_graspable is None else ";".join(result.objects_graspable)
-            ),
-            "n_graspable": (
-                None if result.objects_graspable is None else len(result.objects_graspable)
-            ),
-            "n_attempts": len(result.attempts),
-            "n_success": sum(a.success for a in result.attempts),
-            "status": STATUS_OK,
-            "detail": spec.draw_note,
-        }
-    else:
-        round_row = {
-            **common,
-            "n_objects": len(spec.objects),
-            "n_attempts": 0,
-            "status": STATUS_ERROR,
-            "detail": "; ".join(filter(None, (run.error or "unknown error", spec.draw_note))),
-        }
-    return attempt_rows, {c: _fmt(round_row.get(c)) for c in ROUND_COLUMNS}
 
 
 def _encode(rows: Iterable[dict[str, str]], columns: tuple[str, ...]) -> bytes:

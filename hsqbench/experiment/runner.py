@@ -85,6 +85,10 @@ def unusable_error(spec: TrialSpec, unusable: dict[str, str]) -> str | None:
     )
 
 
+#: Where ``run.json`` records the draws of each round experiment.
+DRAW_KEYS = {"packed": "packed_draws", "pile": "pile_draws"}
+
+
 def packed_draws(
     specs: Iterable[TrialSpec], experiment: str = "packed"
 ) -> dict[str, dict[str, list]]:
@@ -136,20 +140,66 @@ def run_benchmark(
     backend = backend if backend is not None else SimBackend(config.trial_config)
     executor = executor if executor is not None else SerialExecutor()
     store = ResultStore(run_dir)
-    meta = store.read_meta()
-    has_data = meta is not None or (run_dir / ATTEMPTS_FILE).exists()
-    if has_data and force:
-        moved = _move_aside(run_dir)
-        print(f"moved the previous run to {moved}", file=sys.stderr)
-        meta, has_data = None, False
-    if has_data and not resume:
-        raise ResultsError(
-            f"{run_dir} already holds a run: pass --resume to continue it, choose another "
-            "--run name, or --force to move it aside and start again"
+    meta = _existing_run(store, run_dir, resume, force)
+    specs, unusable = _select(config, backend, executor, planners, experiments, progress)
+    fingerprint = backend.fingerprint()
+    chash = config_hash(RunIdentity(config, fingerprint))
+    specs = list(specs)
+    draws = {key: packed_draws(specs, kind) for kind, key in DRAW_KEYS.items()}
+    _check_resumable(run_dir, meta, draws, chash)
+
+    with store.locked():
+        version = code_version()
+        machine = machine_info()
+        if meta is None:
+            meta = _new_meta(run_dir, config_name, chash, config, fingerprint, version, machine)
+        redrawn = []
+        for kind, key in DRAW_KEYS.items():
+            if draws[key] or key in meta or kind == "packed":
+                meta[key] = {**meta.get(key, {}), **draws[key]}
+            redrawn += sorted(f"{kind} {k}" for k, v in draws[key].items() if v["rejected"])
+        if redrawn and progress:
+            print(
+                f"round(s) {redrawn} redrawn: their first draws cannot be placed apart (packed) "
+                f"or do not settle into a pile (pile) (packed_draws, pile_draws in {RUN_FILE}; "
+                "detail in rounds.csv)",
+                file=sys.stderr,
+            )
+        kept = store.prepare(retry_errors=retry_errors)
+        pending = [s for s in specs if s.key not in store.done_keys]
+        summary = RunSummary(run_dir, chash, len(specs), len(specs) - len(pending))
+        session = _new_session(version, machine, executor, specs, summary, unusable)
+        meta["sessions"].append(session)
+        store.write_meta(meta)
+        tally = Tally()
+        selected_keys = {s.key for s in specs}
+        tally.add(r for r in kept.attempts if r["trial_key"] in selected_keys)
+        _run_pending(
+            store,
+            meta,
+            session,
+            summary,
+            tally,
+            pending,
+            unusable,
+            backend,
+            executor,
+            version,
+            progress,
         )
-    if has_data and meta is None:
-        raise ResultsError(f"{run_dir} has results but no {RUN_FILE}: choose another --run name")
-    # The selection is checked (cheaply) before any object is built.
+    return summary
+
+
+def _select(
+    config: ExperimentConfig,
+    backend: TrialBackend,
+    executor: Executor,
+    planners: Iterable[str] | None,
+    experiments: Iterable[str] | None,
+    progress: bool,
+) -> tuple[list[TrialSpec], dict[str, str]]:
+    """The trials to run and the objects that cannot be used (with why), after checking the
+    selection (cheaply, before any object is built) and making the objects ready."""
     first_draws = build_trials(config, planners, experiments)
     backend.check(tuple(dict.fromkeys(s.planner for s in first_draws)))
     jobs = 1 if isinstance(executor, SerialExecutor) else getattr(executor, "jobs", None)
@@ -170,113 +220,147 @@ def run_benchmark(
         return not unusable.keys().isdisjoint(objects) or backend.pile_placeable(objects, seed)
 
     specs = build_trials(config, planners, experiments, placeable, pile_placeable)
-    selected_planners = tuple(dict.fromkeys(s.planner for s in specs))
-    fingerprint = backend.fingerprint()
-    chash = config_hash(RunIdentity(config, fingerprint))
+    return specs, unusable
 
-    draws = packed_draws(specs)
-    piles = packed_draws(specs, "pile")
-    if meta is not None:
-        changed = sorted(
-            k
-            for k, v in draws.items()
-            if k in meta.get("packed_draws", {}) and meta["packed_draws"][k] != v
-        ) + sorted(
-            f"pile {k}"
-            for k, v in piles.items()
-            if k in meta.get("pile_draws", {}) and meta["pile_draws"][k] != v
+
+def _new_meta(
+    run_dir: Path,
+    config_name: str,
+    chash: str,
+    config: ExperimentConfig,
+    fingerprint: dict[str, Any],
+    version: str,
+    machine: dict[str, Any],
+) -> dict[str, Any]:
+    """A new run's ``run.json``: config, hash, backend settings, code version and machine."""
+    return {
+        "run": run_dir.name,
+        "config_name": config_name,
+        "config_hash": chash,
+        "config": to_dict(config),
+        "backend": fingerprint,
+        "code_version": version,
+        "created_at": _now(),
+        "machine": machine,
+        "sessions": [],
+    }
+
+
+def _new_session(
+    version: str,
+    machine: dict[str, Any],
+    executor: Executor,
+    specs: list[TrialSpec],
+    summary: RunSummary,
+    unusable: dict[str, str],
+) -> dict[str, Any]:
+    """The record of this invocation in ``run.json``'s ``sessions``."""
+    return {
+        "started_at": _now(),
+        "code_version": version,
+        "host": machine["host"],
+        "machine": machine,
+        "executor": executor.name,
+        "jobs": getattr(executor, "jobs", None),
+        "planners": list(dict.fromkeys(s.planner for s in specs)),
+        "experiments": sorted({s.experiment for s in specs}),
+        "trials_selected": summary.selected,
+        "trials_skipped": summary.skipped,
+        "unusable_objects": dict(unusable),
+        "status": "running",
+    }
+
+
+def _existing_run(
+    store: ResultStore, run_dir: Path, resume: bool, force: bool
+) -> dict[str, Any] | None:
+    """The ``run.json`` of the run in ``run_dir`` to continue (None: a new run), after the
+    folder checks: ``force`` moves an old run aside; without ``resume`` an existing run is an
+    error."""
+    meta = store.read_meta()
+    has_data = meta is not None or (run_dir / ATTEMPTS_FILE).exists()
+    if has_data and force:
+        moved = _move_aside(run_dir)
+        print(f"moved the previous run to {moved}", file=sys.stderr)
+        return None
+    if has_data and not resume:
+        raise ResultsError(
+            f"{run_dir} already holds a run: pass --resume to continue it, choose another "
+            "--run name, or --force to move it aside and start again"
         )
-        if changed:
-            raise ResultsError(
-                f"{run_dir}: the packed rounds {changed} now draw other objects than when the run "
-                f"was started (recorded in {RUN_FILE}); the objects' footprints or the scene's "
-                "placement changed. Choose a new --run name, or --force to move the old run aside"
-            )
-    if meta is not None and meta.get("config_hash") != chash:
+    if has_data and meta is None:
+        raise ResultsError(f"{run_dir} has results but no {RUN_FILE}: choose another --run name")
+    return meta
+
+
+def _check_resumable(
+    run_dir: Path, meta: dict[str, Any] | None, draws: dict[str, dict[str, dict]], chash: str
+) -> None:
+    """A resumed run must draw the same packed and pile rounds and have the same config
+    hash. ``draws``: ``run.json`` key (``packed_draws``, ``pile_draws``) -> the rounds' draws."""
+    if meta is None:
+        return
+    changed = []
+    for key, rounds in draws.items():
+        recorded = meta.get(key, {})
+        kind = "" if key == "packed_draws" else "pile "
+        changed += sorted(f"{kind}{k}" for k, v in rounds.items() if recorded.get(k, v) != v)
+    if changed:
+        raise ResultsError(
+            f"{run_dir}: the packed rounds {changed} now draw other objects than when the run "
+            f"was started (recorded in {RUN_FILE}); the objects' footprints or the scene's "
+            "placement changed. Choose a new --run name, or --force to move the old run aside"
+        )
+    if meta.get("config_hash") != chash:
         raise ResultsError(
             f"{run_dir} was run with config hash {meta.get('config_hash')}, but this config "
             f"(with its trial settings) hashes to {chash}: results of two configs must not mix. "
             "Choose a new --run name, or --force to move the old run aside"
         )
 
-    with store.locked():
-        version = code_version()
-        machine = machine_info()
-        if meta is None:
-            meta = {
-                "run": run_dir.name,
-                "config_name": config_name,
-                "config_hash": chash,
-                "config": to_dict(config),
-                "backend": fingerprint,
-                "code_version": version,
-                "created_at": _now(),
-                "machine": machine,
-                "sessions": [],
-            }
-        meta["packed_draws"] = {**meta.get("packed_draws", {}), **draws}
-        if piles or "pile_draws" in meta:
-            meta["pile_draws"] = {**meta.get("pile_draws", {}), **piles}
-        redrawn = sorted(k for k, v in draws.items() if v["rejected"])
-        redrawn += sorted(f"pile {k}" for k, v in piles.items() if v["rejected"])
-        if redrawn and progress:
-            print(
-                f"round(s) {redrawn} redrawn: their first draws cannot be placed apart (packed) "
-                f"or do not settle into a pile (pile) (packed_draws, pile_draws in {RUN_FILE}; "
-                "detail in rounds.csv)",
-                file=sys.stderr,
-            )
-        kept = store.prepare(retry_errors=retry_errors)
-        done = store.done_keys
-        pending = [s for s in specs if s.key not in done]
-        summary = RunSummary(run_dir, chash, len(specs), len(specs) - len(pending))
-        session: dict[str, Any] = {
-            "started_at": _now(),
-            "code_version": version,
-            "host": machine["host"],
-            "machine": machine,
-            "executor": executor.name,
-            "jobs": getattr(executor, "jobs", None),
-            "planners": list(selected_planners),
-            "experiments": sorted({s.experiment for s in specs}),
-            "trials_selected": summary.selected,
-            "trials_skipped": summary.skipped,
-            "unusable_objects": dict(unusable),
-            "status": "running",
-        }
-        meta["sessions"].append(session)
-        store.write_meta(meta)
 
-        tally = Tally()
-        selected_keys = {s.key for s in specs}
-        tally.add(r for r in kept.attempts if r["trial_key"] in selected_keys)
-        shown = RunProgress(run_dir.name, len(specs), summary.skipped, tally) if progress else None
-        status = "failed"
-        try:
-            blocked = [s for s in pending if unusable_error(s, unusable)]
-            runnable = [s for s in pending if not unusable_error(s, unusable)]
-            recorded = (TrialRun.failed(s, unusable_error(s, unusable) or "") for s in blocked)
-            ran = executor.run(backend, runnable) if runnable else ()
-            for trial_run in itertools.chain(recorded, ran):
-                rows = store.append(trial_run, chash, version)
-                summary.ran += 1
-                summary.errors += not trial_run.ok
-                tally.add(rows)
-                if shown is not None:
-                    shown.update()
-            status = "finished"
-        except KeyboardInterrupt:
-            summary.interrupted = True
-            status = "interrupted"
-            raise
-        finally:
+def _run_pending(
+    store: ResultStore,
+    meta: dict[str, Any],
+    session: dict[str, Any],
+    summary: RunSummary,
+    tally: Tally,
+    pending: list[TrialSpec],
+    unusable: dict[str, str],
+    backend: TrialBackend,
+    executor: Executor,
+    version: str,
+    progress: bool,
+) -> None:
+    """Run the pending trials (those with an unusable object recorded as errors without
+    running), appending each as it finishes; the session's status is recorded however it ends."""
+    shown = (
+        RunProgress(store.run_dir.name, summary.selected, summary.skipped, tally)
+        if progress
+        else None
+    )
+    status = "failed"
+    try:
+        blocked = [s for s in pending if unusable_error(s, unusable)]
+        runnable = [s for s in pending if not unusable_error(s, unusable)]
+        recorded = (TrialRun.failed(s, unusable_error(s, unusable) or "") for s in blocked)
+        ran = executor.run(backend, runnable) if runnable else ()
+        for trial_run in itertools.chain(recorded, ran):
+            rows = store.append(trial_run, summary.config_hash, version)
+            summary.ran += 1
+            summary.errors += not trial_run.ok
+            tally.add(rows)
             if shown is not None:
-                shown.close()
-            session.update(
-                finished_at=_now(),
-                trials_run=summary.ran,
-                errors=summary.errors,
-                status=status,
-            )
-            store.write_meta(meta)
-    return summary
+                shown.update()
+        status = "finished"
+    except KeyboardInterrupt:
+        summary.interrupted = True
+        status = "interrupted"
+        raise
+    finally:
+        if shown is not None:
+            shown.close()
+        session.update(
+            finished_at=_now(), trials_run=summary.ran, errors=summary.errors, status=status
+        )
+        store.write_meta(meta)

@@ -42,7 +42,7 @@ BackendFactory = Callable[[str, dict[str, Any]], TrialBackend]
 
 
 def sim_backend(trial_config: str, overrides: dict[str, Any]) -> TrialBackend:
-    return SimBackend(trial_config, overrides=dict(overrides))
+    return SimBackend(trial_config, overrides=tuple(overrides.items()))
 
 
 def point_config(protocol: SweepProtocol, sweep: SweepConfig) -> ExperimentConfig:

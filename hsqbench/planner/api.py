@@ -27,10 +27,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.config import resolve_config_path
 from hsqbench.planner.additions import AdditionsConfig
+from hsqbench.planner.base import CleanInput, PlannerBase, rules_removed_reason
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet
-from hsqbench.planner.cleaning import all_removed_reason, clean_cloud
+from hsqbench.planner.cleaning import CleaningConfig
 from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_config
-from hsqbench.planner.elimination import RULE_DESCRIPTIONS, eliminate
+from hsqbench.planner.elimination import eliminate
 from hsqbench.planner.grasp import Grasp
 from hsqbench.planner.gripper import GripperModel, load_gripper
 from hsqbench.planner.scoring import fit_factors, score_candidates
@@ -109,17 +110,6 @@ class PlanningContext:
         plane = validate_plane(self.support_plane)
         if plane is not None:
             object.__setattr__(self, "support_plane", tuple(float(x) for x in plane))
-
-    def plan_kwargs(self) -> dict[str, Any]:
-        """The keyword arguments the built-in plan functions (:func:`plan_grasps` and the
-        baselines') take from the context: ``packed``, ``support_plane``, ``seed`` and
-        ``camera_positions``."""
-        return {
-            "packed": self.packed,
-            "support_plane": self.support_plane,
-            "seed": self.seed,
-            "camera_positions": self.camera_positions,
-        }
 
 
 @runtime_checkable
@@ -234,13 +224,10 @@ def _no_grasp_reason(
             f"the {gripper.max_opening_m:g} m opening (less a {config.opening_margin_m:g} m "
             f"margin); the narrowest is {narrowest:.3f} m"
         )
-    removed = ", ".join(
-        f"{reason} {counts[reason]}" for reason in REJECTION_REASONS if counts[reason]
-    )
-    last = next(r for r in reversed(REJECTION_REASONS) if counts[r])
-    return (
+    return rules_removed_reason(
+        counts,
         f"no candidate survived: of {len(cands)} candidates on {n_lines} closing lines, the rules "
-        f"removed {removed}; the last were removed by '{last}' ({RULE_DESCRIPTIONS[last]})"
+        "removed ",
     )
 
 
@@ -341,43 +328,13 @@ def plan_grasps(
     Raises:
         ValueError: an empty, non-finite or badly shaped cloud; a bad plane or config.
     """
-    from hsqbench.planner.recovery import recover_hidden_superquadrics
-
-    start = time.perf_counter()
-    raw = validate_cloud(points)
-    cfg = resolve_config(config)
-    cleaned = clean_cloud(raw, cfg.cleaning)
-    cloud = cleaned.points
-    t_cleaning = time.perf_counter() - start
-    if cloud.shape[0] == 0:
-        return PlanResult(
-            grasps=[],
-            timings={"cleaning": t_cleaning, "total": time.perf_counter() - start},
-            reason=all_removed_reason(raw.shape[0], cfg.cleaning),
-            n_removed=raw.shape[0],
-        )
-    start_recovery = time.perf_counter()
-    hidden = recover_hidden_superquadrics(cloud, cfg.recovery, seed=seed)
-    # Inliers index the caller's cloud, not the cleaned one.
-    hidden = [dataclasses.replace(h, inliers=cleaned.input_indices(h.inliers)) for h in hidden]
-    t_recovery = time.perf_counter() - start_recovery
-    result = plan_from_hidden(
-        cloud,
-        hidden,
-        cfg.grasp,
-        gripper=gripper,
-        packed=packed,
-        support_plane=support_plane,
-        seed=seed,
-        camera_positions=camera_positions,
+    context = PlanningContext(
+        support_plane=support_plane, packed=packed, seed=seed, camera_positions=camera_positions
     )
-    result.n_removed = cleaned.n_removed
-    result.timings = {"cleaning": t_cleaning, "recovery": t_recovery, **result.timings}
-    result.timings["total"] = time.perf_counter() - start
-    return result
+    return HSQPlanner(config, gripper).plan(points, context)
 
 
-class HSQPlanner:
+class HSQPlanner(PlannerBase):
     """The paper's planner behind the :class:`Planner` protocol.
 
     ``additions_off``: names of additions (:mod:`hsqbench.planner.additions`) to switch off on
@@ -412,7 +369,27 @@ class HSQPlanner:
             gripper if gripper is not None else resolve_gripper(self.config.grasp.gripper)
         )
 
-    def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
-        result = plan_grasps(points, self.config, gripper=self.gripper, **context.plan_kwargs())
-        result.planner = self.name
+    def cleaning_config(self) -> CleaningConfig:
+        return self.config.cleaning
+
+    def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
+        """Stage one (hidden superquadrics) on the cleaned cloud, then stage two."""
+        from hsqbench.planner.recovery import recover_hidden_superquadrics
+
+        start_recovery = time.perf_counter()
+        hidden = recover_hidden_superquadrics(clean.points, self.config.recovery, seed=context.seed)
+        # Inliers index the caller's cloud, not the cleaned one.
+        hidden = [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in hidden]
+        t_recovery = time.perf_counter() - start_recovery
+        result = plan_from_hidden(
+            clean.points,
+            hidden,
+            self.config.grasp,
+            gripper=self.gripper,
+            packed=context.packed,
+            support_plane=context.support_plane,
+            seed=context.seed,
+            camera_positions=context.camera_positions,
+        )
+        result.timings = {"recovery": t_recovery, **result.timings}
         return result

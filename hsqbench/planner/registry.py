@@ -79,6 +79,18 @@ _FACTORIES: dict[str, PlannerFactory] = {
     "oracle": _oracle,
 }
 
+#: Which entry of :class:`~hsqbench.planner.configs.PlannerConfigs` each planner reads.
+_CONFIG_KEYS: dict[str, str] = {
+    "single-sq": "baselines",
+    "antipodal": "baselines",
+    "contact-graspnet": "contact_graspnet",
+    "contact-graspnet-elim": "contact_graspnet",
+    "oracle": "oracle",
+    "hsq": "hsq",
+    "hsq-paper": "hsq",
+    **{name: "hsq" for name in ablation_planners()},
+}
+
 #: Planners that read simulator truth: their rows are a ceiling, not a method to compare with.
 PRIVILEGED = frozenset({"oracle"})
 
@@ -96,8 +108,11 @@ def unavailable(name: str) -> str | None:
     return None
 
 
-def register_planner(name: str, factory: PlannerFactory, *, replace: bool = False) -> None:
-    """Make ``get_planner(name)`` call ``factory(config)``.
+def register_planner(
+    name: str, factory: PlannerFactory, *, replace: bool = False, config_key: str | None = None
+) -> None:
+    """Make ``get_planner(name)`` call ``factory(config)``; ``config_key`` names the entry of
+    the trial config's ``planners:`` it is built with (None: its own default).
 
     Raises:
         ValueError: ``name`` is empty, or already taken and ``replace`` is False.
@@ -107,6 +122,15 @@ def register_planner(name: str, factory: PlannerFactory, *, replace: bool = Fals
     if name in _FACTORIES and not replace:
         raise ValueError(f"a planner named {name!r} is already registered (pass replace=True)")
     _FACTORIES[name] = factory
+    if config_key is None:
+        _CONFIG_KEYS.pop(name, None)
+    else:
+        _CONFIG_KEYS[name] = config_key
+
+
+def planner_config_key(name: str) -> str | None:
+    """The ``planners:`` entry planner ``name`` reads (None: none; it uses its default)."""
+    return _CONFIG_KEYS.get(name)
 
 
 def planner_names() -> list[str]:

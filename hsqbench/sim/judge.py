@@ -12,17 +12,21 @@ Normal contact forces come from the constraint solver: for elliptic friction con
 constraint row of a contact is its normal force (``efc_force[efc_address]``); for pyramidal cones
 ``mj_contactForce`` is used.
 
-The thresholds live in :class:`JudgeConfig` (``judge:`` in ``configs/trial.yaml``).
+The thresholds live in :class:`JudgeConfig` (``judge:`` in ``configs/trial.yaml``) and are applied
+here, by the rules at the end of this module (:class:`HoldWatch`, :func:`approach_watch`,
+:func:`judge_closed`); the trial runner calls them on the way.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from hsqbench.sim.outcome import Outcome
 from hsqbench.sim.robot import Panda
 
 
@@ -245,3 +249,78 @@ class SceneProbe:
         b = self.object_bodies[name]
         dof = self.model.jnt_dofadr[self.model.body_jntadr[b]]
         data.qvel[dof : dof + 6] = 0.0
+
+
+# ---- the outcome rules (the thresholds of JudgeConfig applied) ----------------------------------
+
+
+class HoldWatch:
+    """Watches that an object stays in the hand: touching both fingers, and the point of it
+    that was between the pads when the hand closed still there (it may pivot about it).
+    Called each control step; returns why the object is lost, or None."""
+
+    def __init__(
+        self, probe: SceneProbe, data: mujoco.MjData, name: str, config: JudgeConfig
+    ) -> None:
+        self.probe, self.data, self.name, self.config = probe, data, name, config
+        self.k = probe.names.index(name)
+        self.point = probe.tcp_in_object(data, name)
+        self.z0 = float(probe.position(data, name)[2])
+        self.max_rise = 0.0
+        self.out_since: float | None = None
+
+    def __call__(self) -> str | None:
+        probe, d, j = self.probe, self.data, self.config
+        self.max_rise = max(self.max_rise, float(probe.position(d, self.name)[2]) - self.z0)
+        touching = probe.finger_contacts(d)[self.k]
+        if touching.all():
+            self.out_since = None
+        elif self.out_since is None:
+            self.out_since = float(d.time)
+        if self.out_since is not None and d.time - self.out_since >= j.lost_time_s:
+            side = "left" if not touching[0] else "right"
+            return f"{self.name} left the {side} finger"
+        slip = probe.slip(d, self.name, self.point)
+        if slip > j.slip_distance_m:
+            return f"{self.name} slipped {slip * 100:.1f} cm in the hand"
+        return None
+
+    def loss(self, reason: str, during: str) -> tuple[Outcome, str]:
+        """The outcome of losing the object ``during`` the lift: ``dropped`` once it had risen
+        ``lifted_height_m``, else ``empty_grasp`` (it was never lifted)."""
+        if self.max_rise > self.config.lifted_height_m:
+            return Outcome.DROPPED, f"during the {during}: {reason}"
+        return Outcome.EMPTY_GRASP, f"not lifted: {reason}"
+
+
+def approach_watch(
+    probe: SceneProbe, data: mujoco.MjData, start: NDArray[np.float64], config: JudgeConfig
+) -> Callable[[], str | None]:
+    """A per-step check before the fingers close: why the motion is a collision (the robot
+    presses the table or bin, or pushes an object away from ``start``, its positions when the
+    motion began), or None."""
+    j = config
+    names = probe.names
+
+    def watch() -> str | None:
+        table_f, obj_f, body = probe.robot_forces(data)
+        if table_f > j.table_contact_force_n:
+            return f"{body} hit the table or bin ({table_f:.0f} N)"
+        moved = np.linalg.norm(probe.positions(data) - start, axis=1)
+        pushed = (obj_f > j.object_contact_force_n) & (moved > j.pushed_distance_m)
+        if pushed.any():
+            k = int(np.argmax(np.where(pushed, moved, -1.0)))
+            return f"hand pushed {names[k]} {moved[k] * 100:.1f} cm ({obj_f[k]:.0f} N)"
+        return None
+
+    return watch
+
+
+def judge_closed(width_m: float, held: list[str], config: JudgeConfig) -> str | None:
+    """Why the closed hand holds nothing (an ``empty_grasp``), or None: the fingers closed to
+    within ``empty_width_m``, or no object touches both fingers."""
+    if width_m < config.empty_width_m:
+        return f"fingers closed fully ({width_m * 1000:.1f} mm)"
+    if not held:
+        return f"no object between the fingers ({width_m * 1000:.0f} mm)"
+    return None

@@ -31,10 +31,10 @@ class ContactConfig:
         solimp: (dmin, dmax, width_m, midpoint, power).
     """
 
-    friction: tuple[float, float, float] = (1.0, 0.005, 0.0001)
+    friction: tuple[float, float, float] = (0.6, 0.005, 0.0001)
     condim: int = 3
-    solref: tuple[float, float] = (0.02, 1.0)
-    solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
+    solref: tuple[float, float] = (0.01, 1.0)
+    solimp: tuple[float, float, float, float, float] = (0.95, 0.99, 0.001, 0.5, 2.0)
 
     def __post_init__(self) -> None:
         if self.condim not in (1, 3, 4, 6):
@@ -77,8 +77,12 @@ class PhysicsConfig:
     iterations: int = 100
     ls_iterations: int = 50
     tolerance: float = 1e-8
-    noslip_iterations: int = 0
-    objects: ContactConfig = field(default_factory=ContactConfig)
+    noslip_iterations: int = 10
+    # The defaults are configs/physics.yaml's (tests/test_config_defaults.py): the table's
+    # contact is ContactConfig's; objects grip better and twist less (friction 0.8, condim 4).
+    objects: ContactConfig = field(
+        default_factory=lambda: ContactConfig(friction=(0.8, 0.005, 0.0001), condim=4)
+    )
     table: ContactConfig = field(default_factory=ContactConfig)
     settle_time_s: float = 1.0
     settle_speed_mps: float = 0.005

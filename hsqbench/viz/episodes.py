@@ -117,9 +117,8 @@ def choose_trials(
 
 def run_trial_config(run_dir: str | Path) -> Any:
     """The :class:`~hsqbench.sim.trial.TrialConfig` a run used (from its ``run.json``)."""
-    from hsqbench.config import from_dict
     from hsqbench.experiment.results import RUN_FILE
-    from hsqbench.sim.trial import TrialConfig
+    from hsqbench.sim.trial.config import trial_config_from_record
 
     path = Path(run_dir) / RUN_FILE
     if not path.exists():
@@ -131,7 +130,7 @@ def run_trial_config(run_dir: str | Path) -> Any:
             f"{path} holds no trial config (backend {meta.get('backend', {}).get('backend')!r}): "
             "only runs of the simulation backend can be replayed"
         )
-    return from_dict(TrialConfig, stored, where=f"{path.name} trial_config")
+    return trial_config_from_record(stored, where=f"{path.name} trial_config")
 
 
 def record_trial(choice: TrialChoice, trial_config: Any, path: str | Path, viewer_config=None):

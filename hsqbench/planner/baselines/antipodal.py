@@ -44,23 +44,22 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.planner.api import (
+    PlanningContext,
     PlanResult,
-    resolve_config,
-    resolve_gripper,
     validate_cameras,
     validate_plane,
 )
+from hsqbench.planner.base import CleanInput, rules_removed_reason
 from hsqbench.planner.baselines.config import (
     AntipodalConfig,
     BaselinesConfig,
-    resolve_baselines_config,
 )
 from hsqbench.planner.baselines.normals import estimate_normals, orient_outward
-from hsqbench.planner.baselines.planner import BaselinePlanner, clean_input
+from hsqbench.planner.baselines.planner import BaselinePlanner
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
-from hsqbench.planner.elimination import RULE_DESCRIPTIONS, eliminate
+from hsqbench.planner.elimination import eliminate
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.synthesis import roll_angles
 
@@ -230,12 +229,10 @@ def _no_grasp_reason(
             f"opening (less a {grasp_config.opening_margin_m:g} m margin); the narrowest is "
             f"{narrowest:.3f} m"
         )
-    removed = ", ".join(f"{r} {counts[r]}" for r in REJECTION_REASONS if counts[r])
-    last = next(r for r in reversed(REJECTION_REASONS) if counts[r])
-    return (
+    return rules_removed_reason(
+        counts,
         f"no candidate survived: of {len(cands)} candidates on {len(pairs)} antipodal pairs, "
-        f"the rules removed {removed}; the last were removed by '{last}' "
-        f"({RULE_DESCRIPTIONS[last]})"
+        "the rules removed ",
     )
 
 
@@ -266,68 +263,67 @@ def plan_antipodal(
             ``normal_neighbours`` after cleaning and downsampling; a bad plane, camera array
             or config.
     """
-    start = time.perf_counter()
-    cfg = resolve_baselines_config(config)
-    acfg = cfg.antipodal
-    pcfg = resolve_config(cfg.planner)
-    gcfg = pcfg.grasp
-    grip = gripper if gripper is not None else resolve_gripper(gcfg.gripper)
-    plane = validate_plane(support_plane)
-    cameras = validate_cameras(camera_positions)
-    clean = clean_input(points, pcfg.cleaning)
-    if clean.points.shape[0] == 0:
-        return clean.empty_result(pcfg.cleaning, AntipodalPlanner.name)
-    cloud = clean.points
-    timings: dict[str, float] = {"cleaning": clean.seconds}
-
-    tick = time.perf_counter()
-    down = voxel_downsample(cloud, acfg.voxel_m).points
-    if down.shape[0] < acfg.normal_neighbours:
-        raise ValueError(
-            f"the cloud has {down.shape[0]} points after {acfg.voxel_m:g} m voxels, fewer than "
-            f"the {acfg.normal_neighbours} neighbours of a normal; lower antipodal.voxel_m or "
-            "antipodal.normal_neighbours"
-        )
-    normals = estimate_normals(down, acfg.normal_neighbours).normals
-    normals = orient_outward(down, normals, acfg.orientation_radius_m, acfg.orientation_voxel_m)
-    timings["normals"] = time.perf_counter() - tick
-
-    tick = time.perf_counter()
-    rng = np.random.default_rng(0 if seed is None else seed)
-    pairs = sample_antipodal_pairs(down, normals, acfg, rng)
-    up = np.array([0.0, 0.0, 1.0]) if plane is None else plane[:3]
-    grasp_cfg = dataclasses.replace(gcfg, roll_step_deg=acfg.roll_step_deg)
-    cands = CandidateSet(closing_lines(pairs, up), roll_angles(grasp_cfg))
-    timings["sampling"] = time.perf_counter() - tick
-
-    tick = time.perf_counter()
-    report = eliminate(
-        cands, cloud, grip, gcfg, plane, 0 if seed is None else seed, camera_positions=cameras
+    context = PlanningContext(
+        support_plane=support_plane, packed=packed, seed=seed, camera_positions=camera_positions
     )
-    timings["elimination"] = time.perf_counter() - tick
-
-    tick = time.perf_counter()
-    cone = np.deg2rad(acfg.friction_half_angle_deg)
-    score_antipodal(cands, pairs, cloud.mean(axis=0), packed, cone, gcfg.q_delta)
-    grasps = cands.ranked()
-    timings["scoring"] = time.perf_counter() - tick
-    timings["total"] = time.perf_counter() - start
-
-    counts = cands.counts_by_reason()
-    return PlanResult(
-        grasps=grasps,
-        candidates=cands,
-        remaining=report.remaining,
-        removed_by={r: counts[r] for r in REJECTION_REASONS},
-        timings=timings,
-        reason="" if grasps else _no_grasp_reason(pairs, cands, report.remaining, acfg, grip, gcfg),
-        planner=AntipodalPlanner.name,
-        n_removed=clean.n_removed,
-    )
+    return AntipodalPlanner(config, gripper).plan(points, context)
 
 
 class AntipodalPlanner(BaselinePlanner):
     """The antipodal baseline behind the :class:`~hsqbench.planner.api.Planner` protocol."""
 
     name = "antipodal"
-    plan_function = staticmethod(plan_antipodal)
+
+    def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
+        """Normals, antipodal pairs, the shared elimination rules and the antipodal score."""
+        acfg, gcfg, grip = self.config.antipodal, self.planner_config.grasp, self.gripper
+        plane = validate_plane(context.support_plane)
+        cameras = validate_cameras(context.camera_positions)
+        seed = context.seed
+        cloud = clean.points
+        timings: dict[str, float] = {}
+
+        tick = time.perf_counter()
+        down = voxel_downsample(cloud, acfg.voxel_m).points
+        if down.shape[0] < acfg.normal_neighbours:
+            raise ValueError(
+                f"the cloud has {down.shape[0]} points after {acfg.voxel_m:g} m voxels, fewer "
+                f"than the {acfg.normal_neighbours} neighbours of a normal; lower "
+                "antipodal.voxel_m or antipodal.normal_neighbours"
+            )
+        normals = estimate_normals(down, acfg.normal_neighbours).normals
+        normals = orient_outward(down, normals, acfg.orientation_radius_m, acfg.orientation_voxel_m)
+        timings["normals"] = time.perf_counter() - tick
+
+        tick = time.perf_counter()
+        rng = np.random.default_rng(0 if seed is None else seed)
+        pairs = sample_antipodal_pairs(down, normals, acfg, rng)
+        up = np.array([0.0, 0.0, 1.0]) if plane is None else plane[:3]
+        grasp_cfg = dataclasses.replace(gcfg, roll_step_deg=acfg.roll_step_deg)
+        cands = CandidateSet(closing_lines(pairs, up), roll_angles(grasp_cfg))
+        timings["sampling"] = time.perf_counter() - tick
+
+        tick = time.perf_counter()
+        report = eliminate(
+            cands, cloud, grip, gcfg, plane, 0 if seed is None else seed, camera_positions=cameras
+        )
+        timings["elimination"] = time.perf_counter() - tick
+
+        tick = time.perf_counter()
+        cone = np.deg2rad(acfg.friction_half_angle_deg)
+        score_antipodal(cands, pairs, cloud.mean(axis=0), context.packed, cone, gcfg.q_delta)
+        grasps = cands.ranked()
+        timings["scoring"] = time.perf_counter() - tick
+
+        counts = cands.counts_by_reason()
+        reason = (
+            "" if grasps else _no_grasp_reason(pairs, cands, report.remaining, acfg, grip, gcfg)
+        )
+        return PlanResult(
+            grasps=grasps,
+            candidates=cands,
+            remaining=report.remaining,
+            removed_by={r: counts[r] for r in REJECTION_REASONS},
+            timings=timings,
+            reason=reason,
+        )

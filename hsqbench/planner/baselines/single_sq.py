@@ -31,13 +31,13 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from hsqbench.planner.api import PlanResult, plan_from_hidden, resolve_config
+from hsqbench.planner.api import PlanningContext, PlanResult, plan_from_hidden
+from hsqbench.planner.base import CleanInput
 from hsqbench.planner.baselines.config import (
     BaselinesConfig,
     SingleSQConfig,
-    resolve_baselines_config,
 )
-from hsqbench.planner.baselines.planner import BaselinePlanner, clean_input
+from hsqbench.planner.baselines.planner import BaselinePlanner
 from hsqbench.planner.config import RecoveryConfig
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.gripper import GripperModel
@@ -108,47 +108,10 @@ def plan_single_sq(
     ``hidden_superquadrics`` of the result holds the fitted superquadric (one per object in
     packed scenes, largest object first); their inliers index ``points`` as given.
     """
-    start = time.perf_counter()
-    bcfg = resolve_baselines_config(config)
-    pcfg = resolve_config(bcfg.planner)
-    clean = clean_input(points, pcfg.cleaning)
-    if clean.points.shape[0] == 0:
-        return clean.empty_result(pcfg.cleaning, SingleSQPlanner.name)
-    cloud = clean.points
-    rcfg = pcfg.recovery
-    start_recovery = time.perf_counter()
-    whole = [np.arange(cloud.shape[0])]
-    groups = object_clusters(cloud, bcfg.single_sq) if packed else whole
-    # A loop over objects (at most a handful), each fit vectorised over its points.
-    fits = [_one_superquadric(cloud, g, i, rcfg) for i, g in enumerate(groups)]
-    # Inliers index the caller's cloud, not the cleaned one (as hsq's).
-    hidden = [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in fits]
-    t_recovery = time.perf_counter() - start_recovery
-    if not hidden:
-        result = PlanResult(
-            grasps=[],
-            timings={},
-            reason=(
-                f"no object: every cluster of the cleaned cloud has fewer than "
-                f"{bcfg.single_sq.min_cluster_points} points (single_sq.min_cluster_points)"
-            ),
-        )
-    else:
-        result = plan_from_hidden(
-            cloud,
-            hidden,
-            pcfg.grasp,
-            gripper=gripper,
-            packed=packed,
-            support_plane=support_plane,
-            seed=seed,
-            camera_positions=camera_positions,
-        )
-    result.planner = SingleSQPlanner.name
-    result.n_removed = clean.n_removed
-    result.timings = {"cleaning": clean.seconds, "recovery": t_recovery, **result.timings}
-    result.timings["total"] = time.perf_counter() - start
-    return result
+    context = PlanningContext(
+        support_plane=support_plane, packed=packed, seed=seed, camera_positions=camera_positions
+    )
+    return SingleSQPlanner(config, gripper).plan(points, context)
 
 
 class SingleSQPlanner(BaselinePlanner):
@@ -156,4 +119,39 @@ class SingleSQPlanner(BaselinePlanner):
     protocol."""
 
     name = "single-sq"
-    plan_function = staticmethod(plan_single_sq)
+
+    def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
+        """One superquadric per object (the whole cloud when not packed), then stage two."""
+        bcfg, pcfg = self.config, self.planner_config
+        cloud = clean.points
+        rcfg = pcfg.recovery
+        start_recovery = time.perf_counter()
+        whole = [np.arange(cloud.shape[0])]
+        groups = object_clusters(cloud, bcfg.single_sq) if context.packed else whole
+        # A loop over objects (at most a handful), each fit vectorised over its points.
+        fits = [_one_superquadric(cloud, g, i, rcfg) for i, g in enumerate(groups)]
+        # Inliers index the caller's cloud, not the cleaned one (as hsq's).
+        hidden = [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in fits]
+        t_recovery = time.perf_counter() - start_recovery
+        if not hidden:
+            result = PlanResult(
+                grasps=[],
+                timings={},
+                reason=(
+                    f"no object: every cluster of the cleaned cloud has fewer than "
+                    f"{bcfg.single_sq.min_cluster_points} points (single_sq.min_cluster_points)"
+                ),
+            )
+        else:
+            result = plan_from_hidden(
+                cloud,
+                hidden,
+                pcfg.grasp,
+                gripper=self.gripper,
+                packed=context.packed,
+                support_plane=context.support_plane,
+                seed=context.seed,
+                camera_positions=context.camera_positions,
+            )
+        result.timings = {"recovery": t_recovery, **result.timings}
+        return result

@@ -43,8 +43,9 @@ from hsqbench.planner.api import (
     validate_cameras,
     validate_plane,
 )
-from hsqbench.planner.baselines.planner import clean_input
+from hsqbench.planner.base import CleanInput, PlannerBase
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
+from hsqbench.planner.cleaning import CleaningConfig
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.elimination import RULE_DESCRIPTIONS, approach_openings, eliminate
 from hsqbench.planner.learned import frames, network, width
@@ -186,69 +187,11 @@ def plan_contact_graspnet(
         LearnedExtraMissing: the ``learned`` extra is not installed (the message says how).
         ValueError: a bad cloud, plane, cameras or config.
     """
-    del packed
-    start = time.perf_counter()
-    cfg = resolve_contact_graspnet_config(config)
-    pcfg = resolve_config(cfg.planner)
-    gcfg = pcfg.grasp
-    grip = resolve_gripper(gcfg.gripper)
-    plane = validate_plane(support_plane)
-    cameras = validate_cameras(camera_positions)
-    clean = clean_input(points, pcfg.cleaning)
-    if clean.points.shape[0] == 0:
-        return clean.empty_result(pcfg.cleaning, name)
-    timings = {"cleaning": clean.seconds}
-    _set_threads(cfg.torch_threads)
-
-    tick = time.perf_counter()
-    seed = 0 if seed is None else int(seed)
-    positions, rotations, widths, conf = predict(
-        clean.points, cameras, plane, cfg, seed, gcfg.elimination_voxel_m, grip.max_opening_m
+    del packed  # the network ranks grasps by its confidence alone (no h_delta to drop)
+    context = PlanningContext(
+        support_plane=support_plane, seed=seed, camera_positions=camera_positions
     )
-    timings["network"] = time.perf_counter() - tick
-
-    n = positions.shape[0]
-    lines = ClosingLines(
-        centres=positions,
-        directions=rotations[:, :, 0],
-        approach0=rotations[:, :, 2],
-        half_lengths=0.5 * widths,
-        source=np.full(n, -1, dtype=np.int64),
-        axis=np.full(n, -1, dtype=np.int64),
-        family=np.full(n, FAMILY, dtype="<U12"),
-    )
-    cands = CandidateSet(lines, np.zeros(1))
-    tick = time.perf_counter()
-    remaining = {"synthesised": n}
-    if cfg.eliminate:
-        remaining = eliminate(
-            cands, clean.points, grip, gcfg, plane, seed, camera_positions=cameras
-        ).remaining
-    else:
-        # Only the physical limit: a grasp wider than the hand opens cannot be tried (the
-        # network's own placement never is; one found on the cloud can be).
-        lines.openings = approach_openings(lines.half_lengths, grip, gcfg)
-        cands.rejected_by[widths > grip.max_opening_m] = "width"
-        remaining["width"] = int(np.count_nonzero(cands.kept))
-    timings["elimination"] = time.perf_counter() - tick
-
-    kept = cands.kept
-    cands.scores = np.where(kept, conf, np.nan)
-    cands.factors = {"confidence": cands.scores.copy()}
-    cands.measures = {"width_m": np.where(kept, widths, np.nan)}
-    grasps = cands.ranked()
-    timings["total"] = time.perf_counter() - start
-    counts = cands.counts_by_reason()
-    return PlanResult(
-        grasps=grasps,
-        candidates=cands,
-        remaining=remaining,
-        removed_by={r: counts[r] for r in REJECTION_REASONS},
-        timings=timings,
-        reason="" if grasps else _no_grasp_reason(n, counts, cfg),
-        planner=name,
-        n_removed=clean.n_removed,
-    )
+    return ContactGraspNetPlanner(config, name=name).plan(points, context)
 
 
 def _no_grasp_reason(n: int, counts: dict[str, int], cfg: ContactGraspNetConfig) -> str:
@@ -265,7 +208,7 @@ def _no_grasp_reason(n: int, counts: dict[str, int], cfg: ContactGraspNetConfig)
     )
 
 
-class ContactGraspNetPlanner:
+class ContactGraspNetPlanner(PlannerBase):
     """Contact-GraspNet behind the :class:`~hsqbench.planner.api.Planner` protocol.
 
     ``eliminate`` (None: the config's) turns the harness's elimination rules on or off; the
@@ -286,13 +229,62 @@ class ContactGraspNetPlanner:
         self.config = cfg
         self.name = name
 
-    def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
-        return plan_contact_graspnet(
-            points,
-            self.config,
-            packed=context.packed,
-            support_plane=context.support_plane,
-            seed=context.seed,
-            camera_positions=context.camera_positions,
-            name=self.name,
+    def cleaning_config(self) -> CleaningConfig:
+        return resolve_config(self.config.planner).cleaning
+
+    def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
+        """The network's grasps on the cleaned cloud, then (``eliminate``) the shared rules."""
+        cfg = self.config
+        gcfg = resolve_config(cfg.planner).grasp
+        grip = resolve_gripper(gcfg.gripper)
+        plane = validate_plane(context.support_plane)
+        cameras = validate_cameras(context.camera_positions)
+        timings: dict[str, float] = {}
+        _set_threads(cfg.torch_threads)
+
+        tick = time.perf_counter()
+        seed = 0 if context.seed is None else int(context.seed)
+        positions, rotations, widths, conf = predict(
+            clean.points, cameras, plane, cfg, seed, gcfg.elimination_voxel_m, grip.max_opening_m
+        )
+        timings["network"] = time.perf_counter() - tick
+
+        n = positions.shape[0]
+        lines = ClosingLines(
+            centres=positions,
+            directions=rotations[:, :, 0],
+            approach0=rotations[:, :, 2],
+            half_lengths=0.5 * widths,
+            source=np.full(n, -1, dtype=np.int64),
+            axis=np.full(n, -1, dtype=np.int64),
+            family=np.full(n, FAMILY, dtype="<U12"),
+        )
+        cands = CandidateSet(lines, np.zeros(1))
+        tick = time.perf_counter()
+        remaining = {"synthesised": n}
+        if cfg.eliminate:
+            remaining = eliminate(
+                cands, clean.points, grip, gcfg, plane, seed, camera_positions=cameras
+            ).remaining
+        else:
+            # Only the physical limit: a grasp wider than the hand opens cannot be tried (the
+            # network's own placement never is; one found on the cloud can be).
+            lines.openings = approach_openings(lines.half_lengths, grip, gcfg)
+            cands.rejected_by[widths > grip.max_opening_m] = "width"
+            remaining["width"] = int(np.count_nonzero(cands.kept))
+        timings["elimination"] = time.perf_counter() - tick
+
+        kept = cands.kept
+        cands.scores = np.where(kept, conf, np.nan)
+        cands.factors = {"confidence": cands.scores.copy()}
+        cands.measures = {"width_m": np.where(kept, widths, np.nan)}
+        grasps = cands.ranked()
+        counts = cands.counts_by_reason()
+        return PlanResult(
+            grasps=grasps,
+            candidates=cands,
+            remaining=remaining,
+            removed_by={r: counts[r] for r in REJECTION_REASONS},
+            timings=timings,
+            reason="" if grasps else _no_grasp_reason(n, counts, cfg),
         )

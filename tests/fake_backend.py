@@ -9,6 +9,7 @@ results made with it mean nothing about grasping.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from dataclasses import dataclass, field
@@ -17,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
+from hsqbench.sim.stop_rule import PackedConfig
 
 _FAILURES = (
     Outcome.NO_GRASP_FOUND,
@@ -52,6 +54,7 @@ class FakeBackend:
     unbuildable: tuple[str, ...] = ()
     unknown: tuple[str, ...] = ()
     name: str = "fake"
+    stop_rule: PackedConfig = field(default_factory=PackedConfig)
 
     def __post_init__(self) -> None:
         self._calls = 0
@@ -63,6 +66,8 @@ class FakeBackend:
             "success": dict(sorted(self.success.items())),
             "default_success": self.default_success,
             "unplaceable": [list(g) for g in self.unplaceable],
+            # Where the report finds the stop rule (a sim run has it in its trial config).
+            "packed": dataclasses.asdict(self.stop_rule),
         }
 
     def check(self, planners: tuple[str, ...]) -> None:
@@ -123,7 +128,7 @@ class FakeBackend:
         return TrialResult(obj, seed, planner, [self._attempt(rng, planner, obj)])
 
     def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult:
-        """A round with the paper's stop rule: table empty or two consecutive failures."""
+        """A round under the trial runner's stop rule (:mod:`hsqbench.sim.stop_rule`)."""
         self._enter(("round", *objects))
         if not self.placeable(tuple(objects), seed):
             raise ValueError(f"fake backend: could not place {objects} without contact")
@@ -131,17 +136,13 @@ class FakeBackend:
         left = list(objects)
         attempts: list[Attempt] = []
         cleared: list[str] = []
-        misses = 0
-        while left and misses < 2:
+        while self.stop_rule.stop_reason([a.outcome.value for a in attempts], bool(left)) is None:
             target = left[int(rng.integers(len(left)))]
             attempt = self._attempt(rng, planner, target)
             attempts.append(attempt)
             if attempt.success:
                 left.remove(target)
                 cleared.append(target)
-                misses = 0
-            else:
-                misses += 1
         return RoundResult(list(objects), seed, planner, attempts, cleared)
 
     def run_pile(self, objects: list[str], seed: int, planner: str) -> RoundResult:

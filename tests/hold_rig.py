@@ -39,7 +39,7 @@ class HoldConfig:
     accel_mps2: float = 1.5
     lift_height_m: float = 0.15
     hold_time_s: float = 2.0
-    close_time_s: float = 0.6
+    close_time_s: float = 1.2
     carrier_stiffness_n_per_m: float = 1.0e5
     carrier_damping_ns_per_m: float = 1.2e3
     max_slip_m: float = 0.005

@@ -1,0 +1,198 @@
+"""Execution of a planned grasp in the simulation, as a list of phases (:data:`PHASES`), each
+returning an outcome (the attempt ends there) or None (the next phase runs), judged on the way
+by the rules of :mod:`hsqbench.sim.judge`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hsqbench.sim.ik import Pose
+from hsqbench.sim.judge import HoldWatch, approach_watch, judge_closed
+from hsqbench.sim.motion import JointTrajectory, joint_move_duration, line_duration
+from hsqbench.sim.outcome import Outcome
+from hsqbench.sim.trial.env import TrialEnv
+from hsqbench.sim.trial.geometry import carry_pose
+from hsqbench.sim.trial.planning import GraspMotion, sweep_problem
+
+
+@dataclass
+class ExecutionResult:
+    """What execution found: outcome, the object it concerned, details and phase times."""
+
+    outcome: Outcome
+    target: str
+    detail: str
+    sim_time_s: float = 0.0
+    phases: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class _Execution:
+    """The state the phases share: the plan, the object meant and, once closed, the one held."""
+
+    env: TrialEnv
+    motion: GraspMotion
+    intended: str
+    watch: Callable[[], str | None]
+    target: str = ""
+    hold: HoldWatch | None = None
+    held_width_m: float = 0.0
+
+
+#: A phase's verdict: (outcome, target, detail), or None to go on.
+Verdict = tuple[Outcome, str, str] | None
+
+
+def _line_trajectory(
+    env: TrialEnv, waypoints: NDArray[np.float64], length_m: float, kind: str
+) -> JointTrajectory:
+    """Trajectory through a straight line's IK waypoints, timed by the TCP limits of ``kind``
+    (``approach`` or ``lift``) and by the joint limits, whichever is slower."""
+    m = env.config.motion
+    speed, acc = (
+        (m.approach_speed_mps, m.approach_acceleration_mps2)
+        if kind == "approach"
+        else (m.lift_speed_mps, m.lift_acceleration_mps2)
+    )
+    duration = max(line_duration(length_m, speed, acc), joint_move_duration(waypoints, m))
+    return JointTrajectory(waypoints, duration)
+
+
+def _pregrasp(x: _Execution) -> Verdict:
+    """Joint-space move to the hover pose (then the vertical descent) or the pre-grasp."""
+    env, motion, st = x.env, x.motion, x.env.stepper
+    reason = st.move_joints(motion.q_first, (x.watch,), settle=motion.descent is None)
+    if reason is None and motion.descent is not None:
+        drop = float(
+            np.linalg.norm(
+                env.ik.forward(motion.descent[0]).position
+                - env.ik.forward(motion.descent[-1]).position
+            )
+        )
+        reason = st.follow(_line_trajectory(env, motion.descent, drop, "lift"), (x.watch,))
+    if reason:
+        return Outcome.COLLISION_ON_APPROACH, x.intended, f"moving to the pre-grasp: {reason}"
+    return None
+
+
+def _approach(x: _Execution) -> Verdict:
+    length = x.env.config.execution.pregrasp_distance_m
+    traj = _line_trajectory(x.env, x.motion.approach, length, "approach")
+    reason = x.env.stepper.follow(traj, (x.watch,))
+    if reason:
+        return Outcome.COLLISION_ON_APPROACH, x.intended, f"approaching: {reason}"
+    return None
+
+
+def _close(x: _Execution) -> Verdict:
+    env, d = x.env, x.env.data
+    width = env.stepper.close_hand()
+    held = env.probe.held_objects(d) if width >= env.config.judge.empty_width_m else []
+    empty = judge_closed(width, held, env.config.judge)
+    if empty:
+        return Outcome.EMPTY_GRASP, x.intended, empty
+    tcp = env.panda.tcp_pose(d)[0]
+    x.target = min(held, key=lambda n: float(np.linalg.norm(env.probe.position(d, n) - tcp)))
+    x.hold = HoldWatch(env.probe, d, x.target, env.config.judge)
+    x.held_width_m = width
+    return None
+
+
+def _lift(x: _Execution) -> Verdict:
+    traj = _line_trajectory(x.env, x.motion.lift, x.motion.lift_height_m, "lift")
+    reason = x.env.stepper.follow(traj, (x.hold,))
+    if reason:
+        assert x.hold is not None
+        outcome, detail = x.hold.loss(reason, "lift")
+        return outcome, x.target, detail
+    return None
+
+
+def _carry(x: _Execution) -> Verdict:
+    """Centre the held object over the bin (its actual position in the hand): the carry pose
+    re-solved for it and checked like every planned motion (:func:`sweep_problem`); a carry
+    that cannot be solved or would sweep the arm into the table or bin is ``unreachable``."""
+    env, d, panda = x.env, x.env.data, x.env.panda
+    env.ik.sync(d)
+    lifted = Pose(*panda.tcp_pose(d))
+    carry, _ = carry_pose(env.bin_centre_xy(), lifted, env.probe.position(d, x.target)[:2])
+    restarts = env.config.execution.resolve_restarts
+    sol = env.ik.solve(carry, x.motion.q_carry, env.rngs["ik"], restarts=restarts)
+    if not sol.ok:
+        return Outcome.UNREACHABLE, x.target, f"carry over the bin: {sol.reason}"
+    if problem := sweep_problem(env, panda.arm_q(d), sol.q):
+        return Outcome.UNREACHABLE, x.target, f"carry over the bin: {problem}"
+    reason = env.stepper.move_joints(sol.q, (x.hold,))
+    if reason:
+        return Outcome.DROPPED, x.target, f"during the carry: {reason}"
+    return None
+
+
+def _release(x: _Execution) -> Verdict:
+    """Lower the object toward the bin floor on a checked vertical line, open, and judge where
+    the object came to rest. A lowering that cannot be solved or would sweep the arm into the
+    bin is not run: the hand opens where it is, over the bin (a higher drop, not a failure),
+    and the detail says so."""
+    env, d, panda, probe = x.env, x.env.data, x.env.panda, x.env.probe
+    cfg = env.config
+    note = ""
+    drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
+    if drop > cfg.execution.min_lowering_m:
+        env.ik.sync(d)
+        here = Pose(*panda.tcp_pose(d))
+        path = env.ik.solve_line(
+            here,
+            here.position - np.array([0.0, 0.0, drop]),
+            cfg.execution.lift_segments,
+            panda.arm_q(d),
+        )
+        waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
+        problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
+        if problem:
+            note = f" (released {drop * 100:.0f} cm higher: lowering {problem})"
+        else:
+            traj = _line_trajectory(env, waypoints, drop, "lift")
+            reason = env.stepper.follow(traj, (x.hold,))
+            if reason:
+                return Outcome.DROPPED, x.target, f"lowering into the bin: {reason}"
+    env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
+    env.stepper.hold(cfg.motion.fall_time_s)
+    if probe.in_bin(d, x.target):
+        return Outcome.SUCCESS, x.target, "in the bin" + note
+    where = probe.position(d, x.target).round(3).tolist()
+    return Outcome.DROPPED, x.target, f"released but not in the bin (at {where} m){note}"
+
+
+#: The phases in order, by the names the stepper, the recorder and the phase times use.
+PHASES: tuple[tuple[str, Callable[[_Execution], Verdict]], ...] = (
+    ("pregrasp", _pregrasp),
+    ("approach", _approach),
+    ("close", _close),
+    ("lift", _lift),
+    ("carry", _carry),
+    ("release", _release),
+)
+
+
+def execute_grasp(env: TrialEnv, motion: GraspMotion, intended: str) -> ExecutionResult:
+    """Run one planned grasp in the simulation and judge it, phase by phase (:data:`PHASES`;
+    the rules: :mod:`hsqbench.sim.trial` and :mod:`hsqbench.sim.judge`)."""
+    d = env.data
+    t_start = d.time
+    phases: dict[str, float] = {}
+    env.panda.open_gripper(d)
+    start = env.probe.positions(d)
+    x = _Execution(env, motion, intended, approach_watch(env.probe, d, start, env.config.judge))
+    for name, phase in PHASES:
+        t0 = d.time
+        env.stepper.phase = name
+        verdict = phase(x)
+        phases[name] = float(d.time - t0)
+        if verdict is not None:
+            outcome, target, detail = verdict
+            return ExecutionResult(outcome, target, detail, float(d.time - t_start), phases)
+    raise AssertionError("the release phase always returns an outcome")

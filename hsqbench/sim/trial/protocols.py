@@ -1,0 +1,143 @@
+"""The two protocols: an isolated trial (one object, one attempt) and a packed round (attempts
+until the table is clear or the stop rule ends the round)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from hsqbench.sim.ik import Pose
+from hsqbench.sim.motion import SimUnstable
+from hsqbench.sim.objects import ObjectLike
+from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
+from hsqbench.sim.recorder import Recorder
+from hsqbench.sim.trial.attempt import AttemptTrace, resolve_planner, run_attempt
+from hsqbench.sim.trial.config import TrialConfig, load_trial_config
+from hsqbench.sim.trial.env import TrialEnv
+
+
+def _return_home(env: TrialEnv) -> None:
+    """Open the hand, rise, and go home (between the attempts of a packed round)."""
+    st, panda, d = env.stepper, env.panda, env.data
+    st.phase = "home"
+    st.open_hand(panda.max_width() - env.config.execution.release_gap_m)
+    env.ik.sync(d)
+    here = Pose(*panda.tcp_pose(d))
+    up = env.ik.solve(
+        here.moved([0.0, 0.0, env.config.execution.retreat_height_m]),
+        panda.arm_q(d),
+        restarts=env.config.execution.resolve_restarts,
+    )
+    if up.ok:
+        st.move_joints(up.q, settle=False)
+    st.move_joints(panda.home_arm_q)
+
+
+def _planner_name(planner: Any) -> str:
+    return (
+        planner
+        if isinstance(planner, str)
+        else str(getattr(planner, "name", type(planner).__name__))
+    )
+
+
+def _clear(env: TrialEnv) -> list[str]:
+    """Take the objects in the bin (returned: cleared) and those off the table (not cleared)
+    out of the scene."""
+    cleared = []
+    for name in env.info.objects:
+        if name in env.removed:
+            continue
+        if env.probe.in_bin(env.data, name):
+            cleared.append(name)
+            env.remove(name)
+        elif not env.probe.on_table(env.data, name):
+            env.remove(name)
+    return cleared
+
+
+def run_isolated_trial(
+    object: str | ObjectLike,
+    seed: int,
+    planner: Any = "hsq",
+    config: TrialConfig | None = None,
+    *,
+    recorder: Recorder | None = None,
+    traces: list[AttemptTrace] | None = None,
+) -> TrialResult:
+    """One object at the seed's random upright pose, one attempt (the paper's isolated protocol).
+
+    Args:
+        object: an object name (``hsqbench.assets.library``) or an object.
+        seed: the only source of randomness.
+        planner: a planner name (``hsqbench.planner.planner_names()``) or a ``Planner``.
+        config: default ``configs/trial.yaml``.
+        recorder: episode recorder (default: none).
+        traces: if given, the attempt's :class:`AttemptTrace` is appended to it.
+    """
+    cfg = config if config is not None else load_trial_config()
+    plan = resolve_planner(planner, cfg)
+    with TrialEnv.build("isolated", object, seed, cfg, recorder) as env:
+        attempt, trace = run_attempt(env, plan, packed=False)
+        trace.scene_build_s = env.info.build_time_s
+        name = env.info.objects[0]
+    if traces is not None:
+        traces.append(trace)
+    return TrialResult(object=name, seed=seed, planner=_planner_name(planner), attempts=[attempt])
+
+
+def run_packed_round(
+    objects: Sequence[str | ObjectLike] | None,
+    seed: int,
+    planner: Any = "hsq",
+    config: TrialConfig | None = None,
+    *,
+    recorder: Recorder | None = None,
+    traces: list[AttemptTrace] | None = None,
+    kind: str = "packed",
+) -> RoundResult:
+    """A packed round: the objects placed apart (drawn by seed when ``objects`` is None), then
+    attempts until the stop rule (:mod:`hsqbench.sim.stop_rule`, ``packed:`` of the config)
+    ends it: no object left on the table, ``max_consecutive_failures`` in a row, the attempt
+    cap, or an unstable simulation.
+
+    Objects in the bin after an attempt are cleared; objects that fell off the table are removed
+    but not cleared. ``h_delta`` is off (``PlanningContext.packed``). ``kind="pile"``: the same
+    round on a pile scene (:mod:`hsqbench.sim.scene.pile`) under the config's ``pile:`` rule.
+    """
+    if kind not in ("packed", "pile"):
+        raise ValueError(f"a clutter-removal round is packed or pile, got {kind!r}")
+    cfg = config if config is not None else load_trial_config()
+    rule = cfg.pile if kind == "pile" else cfg.packed
+    plan = resolve_planner(planner, cfg)
+    attempts: list[Attempt] = []
+    cleared: list[str] = []
+    graspable: list[str] | None = None
+    outcomes: list[str] = []
+    with TrialEnv.build(kind, objects, seed, cfg, recorder) as env:
+        while rule.stop_reason(outcomes, bool(env.objects_on_table())) is None:
+            attempt, trace = run_attempt(env, plan, packed=True)
+            if not attempts:
+                trace.scene_build_s = env.info.build_time_s
+                graspable = trace.graspable_objects
+            attempts.append(attempt)
+            outcomes.append(attempt.outcome.value)
+            if traces is not None:
+                traces.append(trace)
+            if attempt.outcome == Outcome.SIM_UNSTABLE:
+                break
+            try:
+                _return_home(env)
+            except SimUnstable as exc:
+                attempt.detail += f"; then the simulation became unstable going home: {exc}"
+                break
+            cleared += _clear(env)
+        names = list(env.info.objects)
+    return RoundResult(
+        objects=names,
+        seed=seed,
+        planner=_planner_name(planner),
+        attempts=attempts,
+        objects_cleared=cleared,
+        objects_graspable=graspable,
+    )
