@@ -39,3 +39,10 @@ def test_huge_extent_uses_the_exact_path() -> None:
 def test_bad_voxel_size() -> None:
     with pytest.raises(ValueError, match="voxel"):
         voxel_downsample(np.zeros((3, 3)), 0.0)
+
+
+def test_an_empty_cloud_downsamples_to_an_empty_cloud() -> None:
+    # a privileged planner plans with whatever was perceived, which may be nothing
+    down = voxel_downsample(np.zeros((0, 3)), 0.01)
+    assert down.points.shape == (0, 3) and len(down.counts) == 0 and len(down.inverse) == 0
+    assert count_voxels(np.zeros((0, 3)), 0.01) == 0

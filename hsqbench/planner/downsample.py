@@ -39,6 +39,8 @@ class Downsampled:
 
 def voxel_keys(points: Array, voxel_m: float) -> NDArray[np.int64]:
     """One integer per occupied voxel (dense labels 0..M-1), per point (N,)."""
+    if len(points) == 0:
+        return np.zeros(0, dtype=np.int64)
     cells = np.floor((points - points.min(axis=0)) / voxel_m).astype(np.int64)
     dims = cells.max(axis=0) + 1
     if float(np.prod(dims.astype(np.float64))) < 2.0**62:
@@ -51,7 +53,8 @@ def voxel_keys(points: Array, voxel_m: float) -> NDArray[np.int64]:
 
 def count_voxels(points: Array, voxel_m: float) -> int:
     """Number of occupied voxels of size ``voxel_m``."""
-    return int(voxel_keys(points, voxel_m).max()) + 1
+    keys = voxel_keys(points, voxel_m)
+    return int(keys.max()) + 1 if len(keys) else 0
 
 
 def voxel_downsample(points: Array, voxel_m: float) -> Downsampled:
@@ -59,7 +62,7 @@ def voxel_downsample(points: Array, voxel_m: float) -> Downsampled:
     if not voxel_m > 0.0:
         raise ValueError(f"voxel size must be positive metres, got {voxel_m}")
     inverse = voxel_keys(points, voxel_m)
-    m = int(inverse.max()) + 1
+    m = int(inverse.max()) + 1 if len(inverse) else 0
     counts = np.bincount(inverse, minlength=m).astype(np.float64)
     centroids = np.column_stack(
         [np.bincount(inverse, weights=points[:, k], minlength=m) for k in range(3)]

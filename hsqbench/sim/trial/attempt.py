@@ -110,7 +110,10 @@ def plan_motions(env: TrialEnv, grasps: Any, points: Any, trace: AttemptTrace) -
     """Motion-plan the grasps in execution order (:mod:`hsqbench.sim.trial.ordering`) until
     one is executable, at most ``max_ranks`` distinct ones."""
     ex = env.config.execution
-    clear_z = float(points[:, 2].max()) + ex.hover_clearance_m
+    # The hover height clears what the robot sees; a privileged planner may plan with an empty
+    # cloud (objects outside the cameras' crop), and then only the table is in the way.
+    top = float(points[:, 2].max()) if len(points) else env.info.table_top_z
+    clear_z = top + ex.hover_clearance_m
     cloud = voxel_downsample(points, ex.cloud_voxel_m).points
     reasons: list[str] = []
     for r in distinct_in_order(grasps, env.config.max_ranks, env.config.ordering):
