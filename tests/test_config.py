@@ -87,7 +87,7 @@ def test_load_tree_expands_named_configs_and_applies_overrides(tmp_path) -> None
     assert tree == Outer(iterations=3, inner=Inner(spacing_m=0.002))
     moved = load_tree(Outer, tmp_path / "outer.yaml", {"inner.names": ["b", "c"]})
     assert moved.inner == Inner(spacing_m=0.002, names=("b", "c"))
-    with pytest.raises(ConfigError, match="unknown key"):
+    with pytest.raises(ConfigError, match=r"'nothing' is not a key of inner.*valid keys"):
         load_tree(Outer, tmp_path / "outer.yaml", {"inner.nothing": 1})
-    with pytest.raises(ConfigError, match="is a value"):
+    with pytest.raises(ConfigError, match="has no keys"):
         load_tree(Outer, tmp_path / "outer.yaml", {"iterations.x": 1})
