@@ -116,7 +116,7 @@ def test_overrides_reach_into_named_configs_and_change_the_fingerprint() -> None
     assert moved.fingerprint()["trial_config"]["physics"]["objects"]["friction"] == friction
     assert moved.fingerprint() != base
     assert pickle.loads(pickle.dumps(moved)).fingerprint() == moved.fingerprint()
-    with pytest.raises(ConfigError, match=r"unknown key\(s\) \['nothing'\]"):
+    with pytest.raises(ConfigError, match=r"'nothing' is not a key of physics.*valid keys"):
         SimBackend("trial", overrides=(("physics.nothing.here", 1),)).fingerprint()
-    with pytest.raises(ConfigError, match=r"physics\.timestep_s is a value"):
+    with pytest.raises(ConfigError, match=r"physics\.timestep_s holds .* which has no keys"):
         SimBackend("trial", overrides=(("physics.timestep_s.x", 1),)).fingerprint()
