@@ -32,7 +32,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "list", help="show each object: source, mass, size, hull count, built or not"
     )
     p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="only this source")
+    _add_build(sub)
+    _add_download(sub)
+    _add_import(sub)
 
+
+def _add_build(sub: argparse._SubParsersAction) -> None:
+    """``assets build``: which objects to build into the cache."""
     p = sub.add_parser(
         "build",
         help="build objects (convex decomposition, inertia, MuJoCo meshes): NAME..., "
@@ -53,6 +59,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument("--all", action="store_true", help="every object of the library")
     p.add_argument("--jobs", type=int, default=None, help="objects built at once (default: config)")
 
+
+def _add_download(sub: argparse._SubParsersAction) -> None:
+    """``assets download``: which YCB scans to fetch, and where."""
     p = sub.add_parser(
         "download",
         help="fetch Google 16k YCB scans (CC BY 4.0): NAME..., --protocol CONFIG or --all",
@@ -83,6 +92,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--keep-archives", action="store_true", help="keep the .tgz files in DEST/.download"
     )
 
+
+def _add_import(sub: argparse._SubParsersAction) -> None:
+    """``assets import``: a folder of meshes and how to read them."""
     p = sub.add_parser("import", help="register (and build) a folder of meshes (obj/stl/ply)")
     p.add_argument("folder", type=Path, metavar="DIR")
     p.add_argument(

@@ -43,18 +43,8 @@ def _interval(row: pd.Series, prefix: str = "") -> str:
     return f"[{low:.1f}, {high:.1f}]"
 
 
-def render_markdown(
-    data: RunData,
-    t1: pd.DataFrame,
-    t1o: pd.DataFrame,
-    t2: pd.DataFrame,
-    outcomes: pd.DataFrame,
-    times: pd.DataFrame,
-    after_table2: list[str] | tuple[str, ...] = (),
-) -> str:
-    """The human-readable report: both tables beside the paper's rows, outcomes, timings;
-    ``after_table2``: lines of further tables (Table IV, :mod:`hsqbench.experiment.pile_table`)."""
-    conf = f"{100 * data.confidence:g} %"
+def _header(data: RunData, conf: str) -> list[str]:
+    """Title, config and code version, error warning and the run's notes."""
     meta = data.meta
     versions = sorted(set(data.attempts["code_version"])) if len(data.attempts) else []
     out = [f"# Benchmark results: {meta.get('run', '(run)')}", ""]
@@ -73,9 +63,12 @@ def render_markdown(
             "",
         ]
     out += [f"Note: {n}." for n in data.notes] + ([""] if data.notes else [])
+    return out
 
-    graspability = has_graspability(data.attempts)
-    out += ["## Table I: isolated objects, GSR (%)", ""]
+
+def _table1(data: RunData, t1: pd.DataFrame, conf: str, graspability: bool) -> list[str]:
+    """Table I: GSR on isolated objects per method."""
+    out = ["## Table I: isolated objects, GSR (%)", ""]
     if graspability:
         out += [
             "Over all presentations, and over the graspable ones (the oracle found a feasible "
@@ -107,37 +100,44 @@ def render_markdown(
     if graspability:
         heads += ["GSR graspable", f"{conf} CI", "k/n graspable"]
     out += [_md([*heads, "errors", "source"], rows), ""]
+    return out
 
-    if not t1o.empty:
-        out += ["### Isolated GSR per object (successes/attempts, %)", ""]
-        planners = [p for p in data.planners if p in set(t1o["planner"])]
-        rows = []
-        for obj in data.objects:
-            sub = t1o[t1o["object"] == obj].set_index("planner")
-            cells = [obj]
-            if sub.empty:  # every trial of this object failed with an error
-                continue
-            if graspability:  # the same poses for every planner: the first checked one's count
-                checked = sub[sub["checked"] > 0]
-                first = checked.iloc[0] if len(checked) else None
-                cells.append(
-                    "—"
-                    if first is None
-                    else f"{int(first['graspable_attempts'])}/{int(first['checked'])}"
-                )
-            for p in planners:
-                if p in sub.index:
-                    r = sub.loc[p]
-                    cells.append(
-                        f"{int(r['successes'])}/{int(r['attempts'])} ({r['gsr_percent']:.0f})"
-                    )
-                else:
-                    cells.append("—")
-            rows.append(cells)
-        heads = ["object", *(["graspable"] if graspability else []), *planners]
-        out += [_md(heads, rows), ""]
 
-    out += ["## Table II: packed scenes, GSR and CR (%)", ""]
+def _table1_per_object(data: RunData, t1o: pd.DataFrame, graspability: bool) -> list[str]:
+    """Isolated GSR per object and planner (nothing when there is no per-object table)."""
+    if t1o.empty:
+        return []
+    out = ["### Isolated GSR per object (successes/attempts, %)", ""]
+    planners = [p for p in data.planners if p in set(t1o["planner"])]
+    rows = []
+    for obj in data.objects:
+        sub = t1o[t1o["object"] == obj].set_index("planner")
+        cells = [obj]
+        if sub.empty:  # every trial of this object failed with an error
+            continue
+        if graspability:  # the same poses for every planner: the first checked one's count
+            checked = sub[sub["checked"] > 0]
+            first = checked.iloc[0] if len(checked) else None
+            cells.append(
+                "—"
+                if first is None
+                else f"{int(first['graspable_attempts'])}/{int(first['checked'])}"
+            )
+        for p in planners:
+            if p in sub.index:
+                r = sub.loc[p]
+                cells.append(f"{int(r['successes'])}/{int(r['attempts'])} ({r['gsr_percent']:.0f})")
+            else:
+                cells.append("—")
+        rows.append(cells)
+    heads = ["object", *(["graspable"] if graspability else []), *planners]
+    out += [_md(heads, rows), ""]
+    return out
+
+
+def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> list[str]:
+    """Table II: GSR and CR in packed scenes per method."""
+    out = ["## Table II: packed scenes, GSR and CR (%)", ""]
     rows = []
     for _, r in t2.iterrows():
         measured = r["source"] == data.measured
@@ -167,33 +167,46 @@ def render_markdown(
         headers += ["GSR graspable", f"{conf} CI", "CR graspable", f"{conf} CI"]
     headers += ["rounds", "errors"]
     out += [_md([*headers, "source"], rows), ""]
-    out += list(after_table2)
+    return out
 
-    if not outcomes.empty:
-        out += ["## Outcomes per planner (attempt counts; `error` = trials that could not run)", ""]
-        cols = [c for c in OUTCOME_COLUMNS if outcomes[c].sum() > 0 or c == "success"]
-        rows = [
-            [r["experiment"], r["planner"], *[str(int(r[c])) for c in cols]]
-            for _, r in outcomes.iterrows()
+
+def _outcomes(outcomes: pd.DataFrame) -> list[str]:
+    """Attempt counts per outcome and planner."""
+    if outcomes.empty:
+        return []
+    out = ["## Outcomes per planner (attempt counts; `error` = trials that could not run)", ""]
+    cols = [c for c in OUTCOME_COLUMNS if outcomes[c].sum() > 0 or c == "success"]
+    rows = [
+        [r["experiment"], r["planner"], *[str(int(r[c])) for c in cols]]
+        for _, r in outcomes.iterrows()
+    ]
+    out += [_md(["experiment", "planner", *cols], rows), ""]
+    return out
+
+
+def _times(times: pd.DataFrame) -> list[str]:
+    """Planning time per attempt: median, p90 and max per planner."""
+    if times.empty:
+        return []
+    out = ["## Planning time per attempt (s)", ""]
+    rows = [
+        [
+            r["experiment"],
+            r["planner"],
+            str(int(r["n"])),
+            f"{r['median_s']:.3f}",
+            f"{r['p90_s']:.3f}",
+            f"{r['max_s']:.3f}",
         ]
-        out += [_md(["experiment", "planner", *cols], rows), ""]
+        for _, r in times.iterrows()
+    ]
+    out += [_md(["experiment", "planner", "n", "median", "p90", "max"], rows), ""]
+    return out
 
-    if not times.empty:
-        out += ["## Planning time per attempt (s)", ""]
-        rows = [
-            [
-                r["experiment"],
-                r["planner"],
-                str(int(r["n"])),
-                f"{r['median_s']:.3f}",
-                f"{r['p90_s']:.3f}",
-                f"{r['max_s']:.3f}",
-            ]
-            for _, r in times.iterrows()
-        ]
-        out += [_md(["experiment", "planner", "n", "median", "p90", "max"], rows), ""]
 
-    out += [
+def _notes(data: RunData, graspability: bool) -> list[str]:
+    """Definitions of GSR, CR and graspable, and where each row comes from."""
+    out = [
         "## Notes",
         "",
         "- GSR = successful attempts / attempts (an attempt where no grasp was found counts as "
@@ -215,4 +228,28 @@ def render_markdown(
         + (", MuJoCo simulation." if data.measured == MEASURED else ", NOT a simulation."),
         "",
     ]
+    return out
+
+
+def render_markdown(
+    data: RunData,
+    t1: pd.DataFrame,
+    t1o: pd.DataFrame,
+    t2: pd.DataFrame,
+    outcomes: pd.DataFrame,
+    times: pd.DataFrame,
+    after_table2: list[str] | tuple[str, ...] = (),
+) -> str:
+    """The human-readable report: both tables beside the paper's rows, outcomes, timings;
+    ``after_table2``: lines of further tables (Table IV, :mod:`hsqbench.experiment.pile_table`)."""
+    conf = f"{100 * data.confidence:g} %"
+    graspability = has_graspability(data.attempts)
+    out = _header(data, conf)
+    out += _table1(data, t1, conf, graspability)
+    out += _table1_per_object(data, t1o, graspability)
+    out += _table2(data, t2, conf, graspability)
+    out += list(after_table2)
+    out += _outcomes(outcomes)
+    out += _times(times)
+    out += _notes(data, graspability)
     return "\n".join(out)

@@ -153,18 +153,7 @@ def run_benchmark(
         machine = machine_info()
         if meta is None:
             meta = _new_meta(run_dir, config_name, chash, config, fingerprint, version, machine)
-        redrawn = []
-        for kind, key in DRAW_KEYS.items():
-            if draws[key] or key in meta or kind == "packed":
-                meta[key] = {**meta.get(key, {}), **draws[key]}
-            redrawn += sorted(f"{kind} {k}" for k, v in draws[key].items() if v["rejected"])
-        if redrawn and progress:
-            print(
-                f"round(s) {redrawn} redrawn: their first draws cannot be placed apart (packed) "
-                f"or do not settle into a pile (pile) (packed_draws, pile_draws in {RUN_FILE}; "
-                "detail in rounds.csv)",
-                file=sys.stderr,
-            )
+        _record_draws(meta, draws, progress)
         kept = store.prepare(retry_errors=retry_errors)
         pending = [s for s in specs if s.key not in store.done_keys]
         summary = RunSummary(run_dir, chash, len(specs), len(specs) - len(pending))
@@ -188,6 +177,22 @@ def run_benchmark(
             progress,
         )
     return summary
+
+
+def _record_draws(meta: dict, draws: dict[str, dict], progress: bool) -> None:
+    """Merge this session's packed and pile draws into ``meta``; say which rounds were redrawn."""
+    redrawn = []
+    for kind, key in DRAW_KEYS.items():
+        if draws[key] or key in meta or kind == "packed":
+            meta[key] = {**meta.get(key, {}), **draws[key]}
+        redrawn += sorted(f"{kind} {k}" for k, v in draws[key].items() if v["rejected"])
+    if redrawn and progress:
+        print(
+            f"round(s) {redrawn} redrawn: their first draws cannot be placed apart (packed) "
+            f"or do not settle into a pile (pile) (packed_draws, pile_draws in {RUN_FILE}; "
+            "detail in rounds.csv)",
+            file=sys.stderr,
+        )
 
 
 def _select(

@@ -164,15 +164,7 @@ def run_sweep(
         report: write ``sweep.csv`` and the plots afterwards (of every parameter in the folder).
     """
     root = Path(root)
-    params = list(sweep.parameters)
-    if only is not None:
-        wanted = list(only)
-        unknown = sorted(set(wanted) - {p.name for p in params})
-        if unknown:
-            raise ValueError(
-                f"no sweep parameter(s) {unknown}; this sweep has {[p.name for p in params]}"
-            )
-        params = [p for p in params if p.name in wanted]
+    params = _selected_parameters(sweep, only)
     configs = {proto.name: point_config(proto, sweep) for proto in sweep.protocols}
     dirs = {
         (param.name, i, proto.name): point_dir(root, proto, configs[proto.name], point.overrides)
@@ -180,16 +172,7 @@ def run_sweep(
         for i, point in enumerate(param.points)
         for proto in sweep.protocols
     }
-    backends = {}
-    for param in params:
-        for i, point in enumerate(param.points):
-            for proto in sweep.protocols:
-                run_dir = dirs[param.name, i, proto.name]
-                if run_dir not in backends:
-                    trial_config = configs[proto.name].trial_config
-                    backends[run_dir] = backend_factory(trial_config, point.overrides)
-                    # a bad path or planner fails here, before anything is written
-                    backends[run_dir].check(tuple(planners or sweep.planners))
+    backends = _point_backends(sweep, params, dirs, configs, backend_factory, planners)
     root.mkdir(parents=True, exist_ok=True)
     _record(root, sweep, params, dirs)
     todo = list(dict.fromkeys(dirs.values()))
@@ -230,6 +213,42 @@ def run_sweep(
     if report:
         write_sweep_report(root)
     return summary
+
+
+def _selected_parameters(sweep: SweepConfig, only: Iterable[str] | None) -> list[SweepParameter]:
+    """The sweep's parameters, or those named in ``only`` (an unknown name is an error)."""
+    params = list(sweep.parameters)
+    if only is not None:
+        wanted = list(only)
+        unknown = sorted(set(wanted) - {p.name for p in params})
+        if unknown:
+            raise ValueError(
+                f"no sweep parameter(s) {unknown}; this sweep has {[p.name for p in params]}"
+            )
+        params = [p for p in params if p.name in wanted]
+    return params
+
+
+def _point_backends(
+    sweep: SweepConfig,
+    params: list[SweepParameter],
+    dirs: dict[tuple[str, int, str], Path],
+    configs: dict[str, ExperimentConfig],
+    backend_factory: BackendFactory,
+    planners: Iterable[str] | None,
+) -> dict[Path, TrialBackend]:
+    """One checked backend per run folder; a bad path or planner fails here, before any write."""
+    backends: dict[Path, TrialBackend] = {}
+    for param in params:
+        for i, point in enumerate(param.points):
+            for proto in sweep.protocols:
+                run_dir = dirs[param.name, i, proto.name]
+                if run_dir not in backends:
+                    trial_config = configs[proto.name].trial_config
+                    backends[run_dir] = backend_factory(trial_config, point.overrides)
+                    # a bad path or planner fails here, before anything is written
+                    backends[run_dir].check(tuple(planners or sweep.planners))
+    return backends
 
 
 def _elapsed(seconds: float) -> str:

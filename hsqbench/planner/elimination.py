@@ -50,6 +50,10 @@ O(candidates x points): in the frame of a line (``s`` along it, polar ``r, theta
 point is inside a box at roll ``phi`` iff ``s`` is within the box's extent along the closing axis
 and ``psi = theta - phi`` satisfies ``r cos(psi) in [z_lo, z_hi]`` and ``|r sin(psi)| <= y_half``:
 at most four arcs of ``phi``, which mark the discrete rolls they contain.
+
+The rules' geometry lives in :mod:`~hsqbench.planner.support` (rule 2),
+:mod:`~hsqbench.planner.roll_collisions` (rules 4 and 5) and :mod:`~hsqbench.planner.line_frame`;
+their public names stay importable from here.
 """
 
 from __future__ import annotations
@@ -57,7 +61,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from hsqbench.planner.candidates import (
@@ -70,6 +74,30 @@ from hsqbench.planner.candidates import (
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.roll_collisions import body_hits
+from hsqbench.planner.support import (
+    SupportStats,
+    cloud_spacing,
+    support_kappa,
+    support_stats,
+    unobservable_contacts,
+)
+
+__all__ = [
+    "RULE_DESCRIPTIONS",
+    "EliminationReport",
+    "SupportStats",
+    "approach_openings",
+    "body_hits",
+    "cloud_spacing",
+    "duplicate_lines",
+    "eliminate",
+    "line_boxes",
+    "support_kappa",
+    "support_stats",
+    "table_clear",
+    "unobservable_contacts",
+]
 
 #: One line per rule, for messages and the viewer's legend.
 RULE_DESCRIPTIONS = {
@@ -80,16 +108,6 @@ RULE_DESCRIPTIONS = {
     "collision": "paper's test: object points outside the jaw's reach between the fingers",
     "sweep": "a cloud point in the open fingers or in the palm's approach path",
 }
-
-#: Line-by-point pairs processed at once: a dozen float32 arrays of this size stay in cache.
-_CHUNK_PAIRS = 100_000
-#: Query points used to estimate the cloud's spacing (a seeded subset is as good as all).
-_SPACING_SAMPLES = 2000
-#: Slack, in roll steps, when deciding whether a discrete roll lies in an arc (favours collision;
-#: covers the float32 rounding of the angles, about 1e-7 rad).
-_ARC_SLACK = 1e-5
-#: An interval of |psi| that ends within this of 0 or pi (radians, float32 rounding) reaches it.
-_ANGLE_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -107,134 +125,6 @@ class EliminationReport:
     kappa: int
     spacing_m: float
     n_points: int
-
-
-def cloud_spacing(points: NDArray, seed: int = 0) -> float:
-    """Median nearest-neighbour distance of the cloud, metres (a seeded subset of queries)."""
-    if points.shape[0] < 2:
-        return float("inf")
-    rng = np.random.default_rng(seed)
-    n = min(points.shape[0], _SPACING_SAMPLES)
-    query = points[rng.choice(points.shape[0], size=n, replace=False)]
-    dist, _ = cKDTree(points).query(query, k=2)
-    return float(np.median(dist[:, 1]))
-
-
-def support_kappa(spacing: float, config: GraspConfig) -> int:
-    """Points a supported contact needs: ``max(min_points, fraction * pi r^2 / spacing^2)``."""
-    expected = np.pi * config.support_radius_m**2 / max(spacing, 1e-9) ** 2
-    return max(int(config.support_min_points), int(np.ceil(config.support_min_fraction * expected)))
-
-
-def _line_coordinates(
-    points: NDArray, centres: NDArray, directions: NDArray, approach0: NDArray
-) -> tuple[NDArray, NDArray, NDArray]:
-    """Points in each line's frame: ``s`` along ``d``, ``u`` along ``e1``, ``v`` along ``e2``; (M, L).
-
-    float32, relative to each line's centre (so a few micrometres at most are lost, far below
-    the cloud's noise) and half the memory traffic of float64. Written as broadcast sums, not
-    ``points @ axes.T``: a (M, 3) x (3, L) product is too skinny for BLAS, whose threads only
-    add overhead on a busy machine.
-    """
-    e2 = np.cross(directions, approach0)
-    rel = [points[:, k, None].astype(np.float32) for k in range(3)]
-
-    def project(axes: NDArray) -> NDArray:
-        offset = np.einsum("ij,ij->i", centres, axes).astype(np.float32)
-        a = axes.astype(np.float32)
-        return rel[0] * a[:, 0] + rel[1] * a[:, 1] + rel[2] * a[:, 2] - offset
-
-    return project(directions), project(approach0), project(e2)
-
-
-def _chunks(n_lines: int, n_points: int):
-    size = max(1, _CHUNK_PAIRS // max(n_points, 1))
-    for start in range(0, n_lines, size):
-        yield slice(start, min(start + size, n_lines))
-
-
-@dataclass(frozen=True)
-class SupportStats:
-    """What the support cylinders at the two contacts of each line hold.
-
-    Attributes:
-        counts: (n, 2) cloud points in the cylinder at the ``+d`` and ``-d`` contact.
-        cos_tilt: (n, 2) ``|cos|`` of the angle between the line and the normal of the plane
-            fitted to those points (smallest principal axis); 0 where fewer than 3 points.
-    """
-
-    counts: NDArray[np.int64]
-    cos_tilt: NDArray[np.float64]
-
-
-def support_stats(
-    points: NDArray, cands: CandidateSet, lines: NDArray[np.int64], config: GraspConfig
-) -> SupportStats:
-    """Count the points near each contact of ``lines`` and fit a plane to them."""
-    n = lines.size
-    counts = np.zeros((n, 2), dtype=np.int64)
-    cos_tilt = np.zeros((n, 2))
-    L = cands.lines
-    r2 = config.support_radius_m**2
-    depth = config.contact_depth_m
-    for sl in _chunks(n, points.shape[0]):
-        idx = lines[sl]
-        m = idx.size
-        s, u, v = _line_coordinates(points, L.centres[idx], L.directions[idx], L.approach0[idx])
-        h = L.half_lengths[idx].astype(np.float32)
-        near = (u * u + v * v <= r2) & (np.abs(np.abs(s) - h) <= depth)
-        for side, sign in enumerate((1.0, -1.0)):
-            flat = np.flatnonzero(near & (sign * s > 0.0))
-            ln = flat % m
-            coords = np.stack([sign * s.flat[flat], u.flat[flat], v.flat[flat]], axis=1)
-            coords = coords.astype(np.float64)
-            count = np.bincount(ln, minlength=m)
-            counts[sl, side] = count
-            # Covariance of each cylinder's points, (m, 3, 3), from per-line sums.
-            safe = np.maximum(count, 1)[:, None]
-            sums = [np.bincount(ln, weights=coords[:, k], minlength=m) for k in range(3)]
-            mean = np.stack(sums, axis=1).astype(np.float64) / safe
-            centred = coords - mean[ln]
-            cov = np.empty((m, 3, 3))
-            for i in range(3):
-                for j in range(i, 3):
-                    w = centred[:, i] * centred[:, j]
-                    cov[:, i, j] = cov[:, j, i] = np.bincount(ln, weights=w, minlength=m)
-            _, vectors = np.linalg.eigh(cov)
-            cos_tilt[sl, side] = np.where(count >= 3, np.abs(vectors[:, 0, 0]), 0.0)
-    return SupportStats(counts, cos_tilt)
-
-
-def unobservable_contacts(
-    cands: CandidateSet,
-    lines: NDArray[np.int64],
-    cameras: ArrayLike,
-    config: GraspConfig,
-    support_plane: NDArray | None = None,
-) -> NDArray[np.bool_]:
-    """(len(lines), 2): whether the ``+d`` / ``-d`` contact of each line faces away from every
-    camera, i.e. its modelled normal (``+d`` / ``-d``) is more than ``unseen_incidence_deg``
-    from the direction to each camera. Occlusion by other surfaces is not modelled: a contact
-    facing a camera counts as observable even if something hides it (the strict choice).
-
-    With a ``support_plane``, a contact facing down (normal more than ``unseen_max_down_deg``
-    below the plane's) never counts as unobservable: cameras above a table see no downward face,
-    and one without points is as likely the inside of the object (a hidden superquadric fitted
-    to the top of a box ends inside it) as its underside."""
-    L = cands.lines
-    cams = np.asarray(cameras, dtype=np.float64).reshape(-1, 3)
-    cos_max = np.cos(np.deg2rad(config.unseen_incidence_deg))
-    out = np.empty((lines.size, 2), dtype=bool)
-    for side, sign in enumerate((1.0, -1.0)):
-        normal = sign * L.directions[lines]
-        contact = L.centres[lines] + L.half_lengths[lines, None] * normal
-        to_cam = cams[None, :, :] - contact[:, None, :]
-        cos = np.einsum("lj,lkj->lk", normal, to_cam) / np.linalg.norm(to_cam, axis=2)
-        out[:, side] = np.all(cos < cos_max, axis=1)
-        if support_plane is not None:
-            down = normal @ np.asarray(support_plane[:3], float)
-            out[:, side] &= down >= -np.sin(np.deg2rad(config.unseen_max_down_deg))
-    return out
 
 
 def duplicate_lines(
@@ -308,138 +198,43 @@ def table_clear(
     return np.all(dist >= clearance, axis=2)
 
 
-def _mark_arcs(
-    r: NDArray,
-    theta: NDArray,
-    line: NDArray[np.int64],
-    box: NDArray,
-    n_roll: int,
-    diff: NDArray,
-) -> None:
-    """Add +1/-1 markers to ``diff`` (n_lines, 4 n_roll + 1; roll ``j`` at column ``j + 2
-    n_roll``) for the rolls at which each point, at distance ``r`` and angle ``theta`` about its
-    line and within ``box``'s extent along the line, lies inside ``box`` (grasp frame,
-    symmetric in y).
-
-    The point is inside at roll ``phi`` iff ``psi = theta - phi`` has ``r cos(psi)`` in
-    ``[z_lo, z_hi]`` (``|psi|`` in ``[a_lo, a_hi]``) and ``|r sin(psi)| <= y_half`` (``|psi|``
-    in ``[0, beta]`` or ``[pi - beta, pi]``): one or two intervals of ``|psi|``, each two arcs of
-    ``phi`` that merge into one when the interval reaches 0 or pi.
-    """
-    # Python floats: they keep float32 arrays float32 (a numpy float64 scalar would not).
-    z_lo, y_hi, z_hi = float(box[0, 2]), float(box[1, 1]), float(box[1, 2])
-    rs = np.maximum(r, 1e-12)
-    reach = (z_lo <= rs) & (z_hi >= -rs)
-    a_lo = np.arccos(np.clip(z_hi / rs, -1.0, 1.0))
-    a_hi = np.arccos(np.clip(z_lo / rs, -1.0, 1.0))
-    beta = np.arcsin(np.clip(y_hi / rs, 0.0, 1.0))
-    intervals = []
-    if z_hi > 0.0:  # else a_lo > pi/2 >= beta: the first interval is empty
-        intervals.append((a_lo, np.minimum(a_hi, beta)))
-    if z_lo < 0.0:  # else a_hi < pi/2 <= pi - beta: the second is empty
-        intervals.append((np.maximum(a_lo, np.pi - beta), a_hi))
-    if len(intervals) == 2:
-        # Intervals that meet (a point within y_half of the line at every angle) are one: the
-        # rolls at their junction are then marked once, so the markers count points.
-        (lo1, hi1), (lo2, hi2) = intervals
-        meet = (lo1 <= hi1) & (lo2 <= hi2) & (hi1 >= lo2 - _ANGLE_TOL)
-        intervals = [(lo1, np.where(meet, hi2, hi1)), (np.where(meet, np.inf, lo2), hi2)]
-    step = 2.0 * np.pi / n_roll
-    width = diff.shape[1]
-    first, last = [], []
-    for lo, hi in intervals:
-        ok = reach & (lo <= hi)
-        at_zero, at_pi = lo[ok] <= _ANGLE_TOL, hi[ok] >= np.pi - _ANGLE_TOL
-        kinds = (at_zero & at_pi, at_zero & ~at_pi, ~at_zero & at_pi, ~at_zero & ~at_pi)
-        for kind, use in enumerate(kinds):
-            if not np.any(use):
-                continue
-            where = np.flatnonzero(ok)[use]
-            t, p, q = theta[where], lo[where], hi[where]
-            base = line[where] * width + 2 * n_roll
-            # phi = theta - psi for psi in [p, q] and [-q, -p]; arcs that meet merge.
-            if kind == 0:
-                arcs = [(t - np.pi, t + np.pi)]
-            elif kind == 1:
-                arcs = [(t - q, t + q)]
-            elif kind == 2:
-                arcs = [(t + p - 2.0 * np.pi, t - p)]
-            else:
-                arcs = [(t - q, t - p), (t + p, t + q)]
-            for start, stop in arcs:
-                j_lo = np.ceil(start / step - _ARC_SLACK).astype(np.int64)
-                j_hi = np.floor(stop / step + _ARC_SLACK).astype(np.int64)
-                # A full circle ends where it starts: each roll once.
-                j_hi = np.minimum(j_hi, j_lo + n_roll - 1)
-                valid = j_lo <= j_hi
-                first.append(base[valid] + j_lo[valid])
-                last.append(base[valid] + j_hi[valid] + 1)
-    if first:
-        starts = np.bincount(np.concatenate(first), minlength=diff.size)
-        stops = np.bincount(np.concatenate(last), minlength=diff.size)
-        diff += (starts - stops).reshape(diff.shape)
-
-
-def body_hits(
+def _supported(
     points: NDArray,
     cands: CandidateSet,
     lines: NDArray[np.int64],
-    boxes: NDArray,
-    obstacle_radius: NDArray | None = None,
-    obstacle_half_height: NDArray | None = None,
-    max_points: int = 0,
+    config: GraspConfig,
+    kappa: int,
+    camera_positions: NDArray | None,
+    support_plane: NDArray | None,
 ) -> NDArray[np.bool_]:
-    """(len(lines), R): whether more than ``max_points`` obstacle points lie inside each line's
-    ``boxes``
-    (n, k, 2, 3), grasp frame, at each roll.
+    """(len(lines),): lines that pass rule 2 (both contacts supported, or one supported and the
+    other unseen by every camera)."""
+    stats = support_stats(points, cands, lines, config)
+    facing = stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
+    supported = (stats.counts >= kappa) & facing
+    if camera_positions is not None:
+        unseen = unobservable_contacts(cands, lines, camera_positions, config, support_plane)
+        ok = np.all(supported | unseen, axis=1) & np.any(supported, axis=1)
+    else:
+        ok = np.all(supported, axis=1)
+    return ok
 
-    The boxes' extents across the closing axis (y, z) must be the same for every line and
-    symmetric in y; their extents along it may differ (the fingers follow each line's opening).
-    Obstacles are all ``points``, or, when ``obstacle_radius`` and ``obstacle_half_height`` (per
-    line) are given, only the points with ``|s| <= half_height`` and ``r > radius`` (the paper's
-    collision cylinder).
-    """
-    if not (
-        np.allclose(boxes[:, :, :, 1:], boxes[:1, :, :, 1:])
-        and np.allclose(boxes[:, :, 0, 1], -boxes[:, :, 1, 1])
-    ):
-        raise ValueError("box cross-sections must be shared by all lines and symmetric in y")
-    n_roll = cands.n_roll
-    out = np.zeros((lines.size, n_roll), dtype=bool)
-    if lines.size == 0 or points.shape[0] == 0:
-        return out
+
+def _collision_hits(
+    points: NDArray,
+    cands: CandidateSet,
+    lines: NDArray[np.int64],
+    gripper: GripperModel,
+    openings: NDArray,
+    tolerated: int,
+) -> NDArray[np.bool_]:
+    """(len(lines), R): rule 4, the paper's obstacles (between the end planes, outside ``l_j``)
+    inside the open gripper body."""
     L = cands.lines
-    for sl in _chunks(lines.size, points.shape[0]):
-        idx = lines[sl]
-        n = idx.size
-        s, u, v = _line_coordinates(points, L.centres[idx], L.directions[idx], L.approach0[idx])
-        r2 = u * u + v * v
-        obstacle = None
-        if obstacle_radius is not None:
-            obstacle = np.abs(s) <= obstacle_half_height[sl].astype(np.float32)
-            obstacle &= r2 > (obstacle_radius[sl] ** 2).astype(np.float32)
-        diff = np.zeros((n, 4 * n_roll + 1), dtype=np.int64)
-        chunk_boxes = boxes[sl].astype(np.float32)
-        for b in range(boxes.shape[1]):
-            (_, _, z_lo), (_, y_hi, z_hi) = boxes[0, b]
-            # The box's distance range from the line bounds r: a cheap filter before any
-            # trigonometry.
-            r_min = max(z_lo, -z_hi, 0.0)
-            r_max2 = max(z_lo**2, z_hi**2) + y_hi**2
-            mask = (s >= chunk_boxes[:, b, 0, 0]) & (s <= chunk_boxes[:, b, 1, 0])
-            mask &= (r2 >= r_min * r_min) & (r2 <= r_max2)
-            if obstacle is not None:
-                mask &= obstacle
-            flat = np.flatnonzero(mask)
-            if flat.size == 0:
-                continue
-            r = np.sqrt(r2.flat[flat])
-            theta = np.arctan2(v.flat[flat], u.flat[flat])
-            _mark_arcs(r, theta, flat % n, boxes[0, b], n_roll, diff)
-        # Points covering each roll (a point's arcs in one box are disjoint, the boxes too).
-        inside = np.cumsum(diff, axis=1)[:, : 4 * n_roll].reshape(n, 4, n_roll).sum(axis=1)
-        out[sl] = inside > max_points
-    return out
+    half_height = np.minimum(L.half_lengths[lines], 0.5 * gripper.max_opening_m)
+    radius = np.full(lines.size, gripper.jaw_length_m)
+    body = line_boxes(gripper, openings[lines])
+    return body_hits(points, cands, lines, body, radius, half_height, tolerated)
 
 
 def eliminate(
@@ -486,14 +281,7 @@ def eliminate(
     spacing = cloud_spacing(points, seed)
     kappa = support_kappa(spacing, config)
     lines = alive_lines()
-    stats = support_stats(points, cands, lines, config)
-    facing = stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
-    supported = (stats.counts >= kappa) & facing
-    if camera_positions is not None:
-        unseen = unobservable_contacts(cands, lines, camera_positions, config, support_plane)
-        ok = np.all(supported | unseen, axis=1) & np.any(supported, axis=1)
-    else:
-        ok = np.all(supported, axis=1)
+    ok = _supported(points, cands, lines, config, kappa, camera_positions, support_plane)
     apply("support", lines, ~ok)
 
     openings = approach_openings(L.half_lengths, gripper, config)
@@ -508,11 +296,8 @@ def eliminate(
 
     # The paper's obstacles: between the end planes, outside radius l_j.
     lines = alive_lines()
-    half_height = np.minimum(L.half_lengths[lines], 0.5 * gripper.max_opening_m)
-    radius = np.full(lines.size, gripper.jaw_length_m)
-    body = line_boxes(gripper, openings[lines])
     tolerated = config.max_obstacle_points
-    hits = body_hits(points, cands, lines, body, radius, half_height, tolerated)
+    hits = _collision_hits(points, cands, lines, gripper, openings, tolerated)
     apply("collision", lines, hits)
 
     if config.sweep_rule:

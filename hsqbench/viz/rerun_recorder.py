@@ -46,22 +46,21 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.viz.colors import OTHER_REASON_COLOR, REASON_COLORS, camera_colors, score_colors
+from hsqbench.viz.colors import camera_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
 from hsqbench.viz.gripper_outline import gripper_outline
+from hsqbench.viz.rerun_plan import (
+    _best_scores,
+    _log_candidates,
+    _log_superquadrics,
+    _log_top_grasps,
+)
 from hsqbench.viz.scene_geometry import BodyMesh, body_meshes
 
 TIMELINE = "sim_time"
 CHOSEN_COLOR = (255, 255, 255, 255)
 WORKSPACE_COLOR = (200, 200, 200, 255)
 CLOUD_COLOR = (230, 230, 230, 255)
-
-
-def _evenly(indices: NDArray[np.int64], cap: int) -> NDArray[np.int64]:
-    """At most ``cap`` of ``indices``, evenly spread (first and last kept)."""
-    if indices.size <= cap:
-        return indices
-    return indices[np.linspace(0, indices.size - 1, cap).round().astype(np.int64)]
 
 
 def camera_entity_name(name: str) -> str:
@@ -303,56 +302,12 @@ class RerunRecorder:
         self._at_now()
         hidden = list(getattr(plan, "hidden_superquadrics", []) or [])
         cands = getattr(plan, "candidates", None)
-        best = self._best_scores(plan, len(hidden))
-        colors = score_colors(best)
-        for i, h in enumerate(hidden):
-            sq = getattr(h, "superquadric", h)
-            verts, faces = sq.to_mesh(cfg.superquadric_mesh_quarter)
-            path = f"world/planner/superquadrics/{i}"
-            self.rec.log(
-                path,
-                rr.Mesh3D(
-                    vertex_positions=verts.astype(np.float32),
-                    triangle_indices=faces.astype(np.uint32),
-                    vertex_normals=sq.normals(verts).astype(np.float32),
-                    albedo_factor=colors[i],
-                ),
-                rr.AnyValues(
-                    eps1=float(sq.eps1),
-                    eps2=float(sq.eps2),
-                    scale_m=np.asarray(sq.scale, float).tolist(),
-                    alpha_m=float(getattr(h, "alpha", np.nan)),
-                    beta=float(getattr(h, "beta", np.nan)),
-                    best_score=float(best[i]),
-                ),
-            )
-            inliers = getattr(h, "inliers", None)
-            if inliers is not None and self._cloud is not None:
-                idx = _evenly(np.asarray(inliers, dtype=np.int64), cfg.max_inliers)
-                pts = self._cloud[idx]
-                self.rec.log(
-                    f"{path}/inliers",
-                    rr.Points3D(pts, colors=colors[i], radii=cfg.inlier_radius_m),
-                )
+        best = _best_scores(plan, len(hidden))
+        _log_superquadrics(self.rec, rr, cfg, hidden, best, self._cloud)
         if cands is not None and len(cands):
-            self._log_candidates(cands)
+            _log_candidates(self.rec, rr, cfg, cands)
         grasps = plan.grasps
-        top = [grasps[k] for k in range(min(cfg.top_grasps, len(grasps)))]
-        if top:
-            strips, strip_colors, labels = [], [], []
-            for k, g in enumerate(top):
-                lines = gripper_outline(
-                    self.gripper, g.position, g.rotation, g.width, cfg.stem_length_m
-                )
-                strips += lines
-                strip_colors += [score_colors([g.score])[0]] * len(lines)
-                labels += [f"#{k} {g.score:.3f}"] + [""] * (len(lines) - 1)
-            self.rec.log(
-                "world/planner/top_grasps",
-                rr.LineStrips3D(
-                    strips, colors=strip_colors, labels=labels, radii=cfg.outline_radius_m / 2
-                ),
-            )
+        _log_top_grasps(self.rec, rr, cfg, self.gripper, grasps)
         removed = ", ".join(f"{k} {v}" for k, v in getattr(plan, "removed_by", {}).items() if v)
         total = getattr(plan, "timings", {}).get("total")
         took = f" in {total:.2f} s" if total is not None else ""
@@ -363,44 +318,6 @@ class RerunRecorder:
             + (f"; {reason}" if reason else ""),
             level="INFO" if len(grasps) else "WARN",
         )
-
-    def _best_scores(self, plan: Any, n_hidden: int) -> NDArray[np.float64]:
-        """Best surviving score of each hidden superquadric (NaN: none survived)."""
-        best = np.full(n_hidden, np.nan)
-        cands = getattr(plan, "candidates", None)
-        if cands is not None and len(cands):
-            kept = np.flatnonzero(cands.kept & np.isfinite(cands.scores))
-            src = np.asarray(cands.lines.source)[cands.line_index[kept]]
-            ok = (src >= 0) & (src < n_hidden)
-            np.fmax.at(best, src[ok], cands.scores[kept][ok])
-            return best
-        for g in plan.grasps:
-            if 0 <= g.source < n_hidden:
-                best[g.source] = np.fmax(best[g.source], g.score)
-        return best
-
-    def _log_candidates(self, cands: Any) -> None:
-        rr, cfg = self._rr, self.config
-        positions = cands.positions
-        vectors = cfg.candidate_length_m * cands.rotations[:, :, 2]
-        reasons = np.asarray(cands.rejected_by)
-        for reason in np.unique(reasons):
-            idx = _evenly(np.flatnonzero(reasons == reason), cfg.max_candidates)
-            if reason == "":
-                cls, colors = "kept", score_colors(cands.scores[idx])
-            else:
-                cls = str(reason)
-                color = REASON_COLORS.get(cls, OTHER_REASON_COLOR)
-                colors = np.broadcast_to(np.array(color, np.uint8), (idx.size, 4))
-            self.rec.log(
-                f"world/planner/candidates/{_part(cls)}",
-                rr.Arrows3D(
-                    origins=positions[idx] - vectors[idx],
-                    vectors=vectors[idx],
-                    colors=colors,
-                    radii=cfg.candidate_radius_m,
-                ),
-            )
 
     def on_grasp(self, grasp: Any, rank: int) -> None:
         """The grasp about to be executed, as a gripper outline."""
