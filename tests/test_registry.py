@@ -6,7 +6,7 @@ import pytest
 
 import hsqbench.planner.learned.network as network
 from hsqbench.experiment.backend import SimBackend
-from hsqbench.planner.registry import PRIVILEGED, planner_names, unavailable
+from hsqbench.planner.registry import PRIVILEGED, planner_names, runnable, unavailable
 
 
 def test_builtin_planners_are_registered_and_the_oracle_is_privileged():
@@ -27,3 +27,11 @@ def test_a_missing_extra_is_reported_with_the_install_commands(monkeypatch):
 def test_with_the_extra_nothing_is_reported(monkeypatch):
     monkeypatch.setattr(network, "available", lambda: True)
     assert unavailable("contact-graspnet") is None
+
+
+def test_runnable_leaves_out_planners_without_their_extra_and_says_why(monkeypatch, capsys):
+    monkeypatch.setattr(network, "available", lambda: False)
+    assert runnable(["hsq", "contact-graspnet", "antipodal"]) == ["hsq", "antipodal"]
+    assert "leaving out planner contact-graspnet" in capsys.readouterr().err
+    monkeypatch.setattr(network, "available", lambda: True)
+    assert runnable(["hsq", "contact-graspnet"]) == ["hsq", "contact-graspnet"]

@@ -122,15 +122,9 @@ def run(args: argparse.Namespace) -> int:
     config = load_experiment_config(args.config)
     planners = args.planners
     if planners is None:  # the protocol's planners, less optional ones whose extra is missing
-        from hsqbench.planner.registry import unavailable
+        from hsqbench.planner.registry import runnable
 
-        planners = []
-        for p in config.planners:
-            why = unavailable(p)
-            if why is None:
-                planners.append(p)
-            else:
-                print(f"leaving out planner {p}: {why}", file=sys.stderr)
+        planners = runnable(config.planners)
     run_dir = _run_dir(args.run, args.config)
     executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)

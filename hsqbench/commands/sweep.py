@@ -133,16 +133,9 @@ def _available(sweep):
     """The sweep without optional planners whose extra is not installed (said on stderr)."""
     from dataclasses import replace
 
-    from hsqbench.planner.registry import unavailable
+    from hsqbench.planner.registry import runnable
 
-    keep = []
-    for p in sweep.planners:
-        why = unavailable(p)
-        if why is None:
-            keep.append(p)
-        else:
-            print(f"leaving out planner {p}: {why}", file=sys.stderr)
-    return replace(sweep, planners=tuple(keep))
+    return replace(sweep, planners=tuple(runnable(sweep.planners)))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -12,7 +12,8 @@ Factories import their planner lazily, so listing names costs nothing.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from hsqbench.planner.additions import AdditionsConfig, ablation_planners
@@ -106,6 +107,19 @@ def unavailable(name: str) -> str | None:
 
         return None if available() else INSTALL_HINT
     return None
+
+
+def runnable(names: Iterable[str]) -> list[str]:
+    """``names`` less the planners that cannot run here, each left out with its reason on
+    stderr (a protocol or sweep that lists an optional planner still runs without its extra)."""
+    keep = []
+    for name in names:
+        why = unavailable(name)
+        if why is None:
+            keep.append(name)
+        else:
+            print(f"leaving out planner {name}: {why}", file=sys.stderr)
+    return keep
 
 
 def register_planner(
