@@ -131,3 +131,19 @@ def test_a_run_without_piles_has_no_table4(tmp_path: Path) -> None:
     write_report(tmp_path / "run")
     assert not (tmp_path / "run" / TABLE4_CSV).exists()
     assert "Table IV" not in (tmp_path / "run" / TABLES_MD).read_text()
+
+
+def test_table2_counts_the_packed_rounds_only(run_dir: Path) -> None:
+    # Pile rounds share rounds.csv with packed ones: Table II's CR and round count must not
+    # take them in (the run has 2 packed and 4 pile rounds of 3 objects per planner).
+    t2 = pd.read_csv(run_dir / "table2_packed.csv").set_index("method")
+    for planner in ("hsq", "antipodal"):
+        rounds = [
+            r
+            for r in _rows(run_dir / "rounds.csv")
+            if r["trial_key"].startswith(f"packed/{planner}/") and r["status"] == "ok"
+        ]
+        cleared = sum(int(r["n_cleared"]) for r in rounds)
+        assert t2.loc[planner, "rounds"] == len(rounds) == 2
+        assert t2.loc[planner, "objects_presented"] == 2 * 3
+        assert t2.loc[planner, "objects_cleared"] == cleared

@@ -277,8 +277,9 @@ def table2(data: RunData) -> pd.DataFrame:
         ok = _ok(data.attempts, "packed", p)
         gsr = _gsr(ok, data.confidence)
         rounds = data.rounds
-        if not rounds.empty:
-            rounds = rounds[(rounds["planner"] == p) & (rounds["status"] == STATUS_OK)]
+        if not rounds.empty:  # packed rounds only: pile rounds are Table IV's
+            packed = rounds["trial_key"].astype(str).str.startswith("packed/")
+            rounds = rounds[packed & (rounds["planner"] == p) & (rounds["status"] == STATUS_OK)]
         presented = int(rounds["n_objects"].sum()) if len(rounds) else 0
         cleared = int(rounds["n_cleared"].sum()) if len(rounds) else 0
         cr = Rate.of(cleared, presented, data.confidence) if presented else None

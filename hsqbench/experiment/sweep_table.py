@@ -79,8 +79,15 @@ def run_rows(run_dir: Path, experiments: list[str]) -> list[dict[str, Any]]:
                 "errors": errors,
                 "confidence": data.confidence,
             }
-            if experiment == "packed":
-                rounds = r[(r["planner"] == planner) & (r["status"] == STATUS_OK)] if len(r) else r
+            if experiment in ("packed", "pile"):  # CR over this experiment's rounds only
+                mine_r = (
+                    r["trial_key"].astype(str).str.startswith(f"{experiment}/") if len(r) else r
+                )
+                rounds = (
+                    r[mine_r & (r["planner"] == planner) & (r["status"] == STATUS_OK)]
+                    if len(r)
+                    else r
+                )
                 presented = int(rounds["n_objects"].sum()) if len(rounds) else 0
                 cleared = int(rounds["n_cleared"].sum()) if len(rounds) else 0
                 row |= {"objects_presented": presented, "objects_cleared": cleared}
