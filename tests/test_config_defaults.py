@@ -33,6 +33,7 @@ NOT_DEFAULTS = {
     "paper",
     "paper3",
     "paper_pile",
+    "ycb_ablation",
     "quick",
     "ycb",
     "ycb3",
