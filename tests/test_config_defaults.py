@@ -33,6 +33,7 @@ NOT_DEFAULTS = {
     "paper",
     "paper3",
     "paper_pile",
+    "paper_ablation",
     "ycb_ablation",
     "quick",
     "ycb",
