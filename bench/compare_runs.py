@@ -18,26 +18,22 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-#: Columns that must match for the same trial (the seeds fix them; timings do not).
-MATCH = (
-    "experiment",
-    "planner",
-    "seed",
-    "objects",
-    "n_attempts",
-    "status",
-    "outcome",
-    "success",
-    "graspable",
-    "target",
-    "object_pose",
-    "resting_pose",
-    "rank_executed",
-    "n_grasps",
-    "score",
-    "width_m",
-    "detail",
-)
+from hsqbench.experiment.rows import ATTEMPT_COLUMNS
+
+#: Columns that need not match for the same trial: timings, the worker, hashes, versions.
+UNFIXED = {
+    "perception_s",
+    "planning_s",
+    "execution_s",
+    "trial_wall_s",
+    "worker",
+    "config_hash",
+    "code_version",
+    "finished_at",
+}
+#: Columns that must match for the same trial (the seeds fix them): every other column of
+#: attempts.csv but the key.
+MATCH = tuple(c for c in ATTEMPT_COLUMNS if c not in UNFIXED | {"trial_key", "attempt_index"})
 KEY = ("trial_key", "attempt_index")
 
 

@@ -231,6 +231,27 @@ def _no_grasp_reason(
     )
 
 
+def plan_in_context(
+    points: ArrayLike,
+    hidden: Sequence[Any],
+    config: GraspConfig,
+    gripper: GripperModel,
+    context: PlanningContext,
+) -> PlanResult:
+    """Stage two (:func:`plan_from_hidden`) with the scene facts of a planning context: the
+    stage every superquadric planner (hsq, single-sq) ends with."""
+    return plan_from_hidden(
+        points,
+        hidden,
+        config,
+        gripper=gripper,
+        packed=context.packed,
+        support_plane=context.support_plane,
+        seed=context.seed,
+        camera_positions=context.camera_positions,
+    )
+
+
 def plan_from_hidden(
     points: ArrayLike,
     hidden: Sequence[Any],
@@ -381,15 +402,6 @@ class HSQPlanner(PlannerBase):
         # Inliers index the caller's cloud, not the cleaned one.
         hidden = [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in hidden]
         t_recovery = time.perf_counter() - start_recovery
-        result = plan_from_hidden(
-            clean.points,
-            hidden,
-            self.config.grasp,
-            gripper=self.gripper,
-            packed=context.packed,
-            support_plane=context.support_plane,
-            seed=context.seed,
-            camera_positions=context.camera_positions,
-        )
+        result = plan_in_context(clean.points, hidden, self.config.grasp, self.gripper, context)
         result.timings = {"recovery": t_recovery, **result.timings}
         return result

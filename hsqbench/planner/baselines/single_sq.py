@@ -31,7 +31,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from hsqbench.planner.api import PlanningContext, PlanResult, plan_from_hidden
+from hsqbench.planner.api import PlanningContext, PlanResult, plan_in_context
 from hsqbench.planner.base import CleanInput
 from hsqbench.planner.baselines.config import (
     BaselinesConfig,
@@ -143,15 +143,6 @@ class SingleSQPlanner(BaselinePlanner):
                 ),
             )
         else:
-            result = plan_from_hidden(
-                cloud,
-                hidden,
-                pcfg.grasp,
-                gripper=self.gripper,
-                packed=context.packed,
-                support_plane=context.support_plane,
-                seed=context.seed,
-                camera_positions=context.camera_positions,
-            )
+            result = plan_in_context(cloud, hidden, pcfg.grasp, self.gripper, context)
         result.timings = {"recovery": t_recovery, **result.timings}
         return result
