@@ -32,12 +32,14 @@ CLASSES = {
 NOT_DEFAULTS = {
     "paper",
     "paper3",
+    "paper3_facing",
     "paper_pile",
     "paper_ablation",
     "ycb_ablation",
     "quick",
     "ycb",
     "ycb3",
+    "ycb3_facing",
     "scene_resting",
     "trial_resting",
 }
