@@ -115,6 +115,9 @@ def test_point_config_sizes_the_protocol_and_keeps_only_the_sweeps_experiments(s
     assert config.isolated.attempts_per_object == 4 and config.isolated.enabled
     assert not config.packed.enabled and config.seeds == (0, 1)
     assert config.isolated.objects == ("mug", "bowl", "apple")
+    # A protocol's own seeds win over the sweep's.
+    own = point_config(replace(sweep.protocols[0], seeds=(5, 6, 7)), sweep)
+    assert own.seeds == (5, 6, 7) and own.isolated.attempts_per_object == 4
 
 
 def test_sweep_config_errors_name_the_problem():
@@ -124,6 +127,8 @@ def test_sweep_config_errors_name_the_problem():
         SweepParameter(name="x", points=(SweepPoint("p", {}), SweepPoint("p", {"a": 1})))
     with pytest.raises(ConfigError, match="on every point or on none"):
         SweepParameter(name="x", points=(SweepPoint("p", {}, 1.0), SweepPoint("q", {"a": 1})))
+    with pytest.raises(ConfigError, match=r"seeds \[1, 1\] must be distinct"):
+        SweepProtocol("paper", seeds=(1, 1))
     with pytest.raises(ConfigError, match="letters, digits"):
         SweepParameter(name="a/b", path="a", values=(1,))
     values = SweepParameter(name="x", path="a.b", values=(0.5, 1))
@@ -141,6 +146,8 @@ def test_built_in_sweeps_load_and_every_point_is_a_valid_trial_config(name):
 
     sweep = load_sweep_config(name)
     assert [p.config for p in sweep.protocols] == ["paper", "ycb"]
+    # The paper's 15 spread their 45 attempts per point over three base seeds.
+    assert point_config(sweep.protocols[0], sweep).seeds == (0, 1, 2)
     for proto in sweep.protocols:
         config = point_config(proto, sweep)
         for point in sweep.parameters[0].points:
@@ -163,6 +170,13 @@ def test_cli_builds_an_ad_hoc_sweep_with_yaml_values():
     args = build_parser().parse_args(["sweep", "cameras", "--seeds", "3", "4"])
     (sweep,) = _sweeps(args)
     assert sweep.seeds == (3, 4) and sweep.parameters[0].name == "cameras"
+    # --seeds replaces the protocols' own seeds too; --attempts-per-object keeps them.
+    assert all(point_config(p, sweep).seeds == (3, 4) for p in sweep.protocols)
+    args = build_parser().parse_args(["sweep", "cameras", "--attempts-per-object", "2"])
+    (sweep,) = _sweeps(args)
+    paper, ycb = sweep.protocols
+    assert paper.attempts_per_object == ycb.attempts_per_object == 2
+    assert paper.seeds == (0, 1, 2) and ycb.seeds is None
     with pytest.raises(CommandError, match="go together"):
         _sweeps(build_parser().parse_args(["sweep", "--param", "a.b"]))
 

@@ -112,18 +112,21 @@ def _sweeps(args: argparse.Namespace) -> list:
         sweeps = [load_sweep_config(s) for s in args.sweeps]
     out = []
     for sweep in sweeps:
+        from dataclasses import replace
+
         changes = {}
+        protocol_changes = {}
         if args.seeds is not None:
+            # --seeds replaces every protocol's seeds too.
             changes["seeds"] = tuple(args.seeds)
+            protocol_changes["seeds"] = None
         if args.planners is not None:
             changes["planners"] = tuple(args.planners)
         if args.attempts_per_object is not None:
-            changes["protocols"] = tuple(
-                SweepProtocol(p.config, args.attempts_per_object, p.rounds) for p in sweep.protocols
-            )
+            protocol_changes["attempts_per_object"] = args.attempts_per_object
+        if protocol_changes:
+            changes["protocols"] = tuple(replace(p, **protocol_changes) for p in sweep.protocols)
         if changes:
-            from dataclasses import replace
-
             sweep = replace(sweep, **changes)
         out.append(sweep)
     return out

@@ -46,8 +46,8 @@ def sim_backend(trial_config: str, overrides: dict[str, Any]) -> TrialBackend:
 
 
 def point_config(protocol: SweepProtocol, sweep: SweepConfig) -> ExperimentConfig:
-    """The protocol at the sweep's size: its planners, seeds, attempts and rounds, with only
-    the sweep's experiments enabled."""
+    """The protocol at the sweep's size: its planners, seeds (the protocol's own, else the
+    sweep's), attempts and rounds, with only the sweep's experiments enabled."""
     base = load_experiment_config(protocol.config)
     # The objects are resolved names already (``exclude`` applied), so it is emptied.
     iso, pk = base.isolated, base.packed
@@ -69,7 +69,11 @@ def point_config(protocol: SweepProtocol, sweep: SweepConfig) -> ExperimentConfi
             f"{list(sweep.experiments)}"
         )
     return replace(
-        base, planners=sweep.planners, seeds=sweep.seeds, isolated=isolated, packed=packed
+        base,
+        planners=sweep.planners,
+        seeds=protocol.seeds or sweep.seeds,
+        isolated=isolated,
+        packed=packed,
     )
 
 

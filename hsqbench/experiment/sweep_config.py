@@ -102,17 +102,25 @@ class SweepProtocol:
         attempts_per_object: isolated attempts per object and base seed at every point
             (None: the protocol's own).
         rounds: packed rounds per base seed at every point (None: the protocol's own).
+        seeds: base seeds on this protocol (None: the sweep's), so a small protocol can spread
+            its attempts over three seeds while a large one runs one.
     """
 
     config: str
     attempts_per_object: int | None = None
     rounds: int | None = None
+    seeds: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
         for name in ("attempts_per_object", "rounds"):
             value = getattr(self, name)
             if value is not None and value < 1:
                 raise ConfigError(f"sweep protocol {self.config!r}: {name} must be >= 1")
+        if self.seeds is not None and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
+            raise ConfigError(
+                f"sweep protocol {self.config!r}: seeds {list(self.seeds)} must be distinct and "
+                "at least one (or leave seeds out for the sweep's)"
+            )
 
     @property
     def name(self) -> str:
