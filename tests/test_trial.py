@@ -8,6 +8,7 @@ needs a particular grasp.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 from itertools import pairwise
 
@@ -308,9 +309,11 @@ def test_post_grasp_motions_are_checked(config, monkeypatch):
     """After the lift, the carry and the lowering are re-solved for where the object really is
     and checked like the approach (sweep against table and bin). A carry that fails the check
     is ``unreachable`` with the object held, never a silent fallback to the plan; a lowering
-    that fails it is not run: the hand opens over the bin, and the detail says so."""
+    that fails it is tried shorter, else not run: the hand opens over the bin, higher up, and
+    the detail says so."""
     from hsqbench.sim.trial import execution
 
+    sweep_problem = execution.sweep_problem
     problem = "link7 would come 1.0 mm from the table or bin at 50% of it"
     # The lowering (a line: more than two waypoints) fails the check: released from higher up.
     monkeypatch.setattr(execution, "sweep_problem", lambda env, *w: problem if len(w) > 2 else "")
@@ -320,9 +323,31 @@ def test_post_grasp_motions_are_checked(config, monkeypatch):
     assert (
         attempt.detail.startswith("in the bin (released ") and "higher: lowering " in attempt.detail
     )
+    higher_all = float(re.search(r"released (\d+) cm higher", attempt.detail).group(1))
+    # Unpatched, the full lowering meets the bin wall (link7) but a shorter one of
+    # lowering_fractions is made: the box is released lower, and the detail names the full
+    # one's problem.
+    monkeypatch.setattr(execution, "sweep_problem", sweep_problem)
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    assert "higher: lowering " in attempt.detail
+    higher = float(re.search(r"released (\d+) cm higher", attempt.detail).group(1))
+    assert 0 < higher < higher_all
+    only_full = replace(config, execution=replace(config.execution, lowering_fractions=(1.0,)))
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", only_full).attempts
+    assert f"released {higher_all:.0f} cm higher" in attempt.detail
     # The carry (a joint-space move: two waypoints) fails it: unreachable, the box in the hand.
     monkeypatch.setattr(execution, "sweep_problem", lambda env, *w: problem if len(w) == 2 else "")
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
     assert attempt.outcome == Outcome.UNREACHABLE, attempt.detail
     assert attempt.detail == f"carry over the bin: {problem}"
     assert attempt.target == "proc_box" and attempt.rank_executed >= 0
+
+
+def test_lowering_fractions_start_at_the_full_lowering_and_decrease():
+    from hsqbench.sim.trial.config import ExecutionConfig
+
+    assert ExecutionConfig(lowering_fractions=(1.0, 0.4)).lowering_fractions == (1.0, 0.4)
+    for bad in [(), (0.5,), (1.0, 0.5, 0.6), (1.0, 0.0)]:
+        with pytest.raises(ValueError, match=r"lowering_fractions .* start at 1.0"):
+            ExecutionConfig(lowering_fractions=bad)

@@ -4,6 +4,7 @@ trial config tree (the packed stop rule: :mod:`hsqbench.sim.stop_rule`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import pairwise
 from pathlib import Path
 from typing import Any, Literal
 
@@ -49,6 +50,8 @@ class ExecutionConfig:
         release_gap_m: the hand has let go when it is this much wider than when it held.
         nudge_extra_m: added to a table nudge so the raised grasp clears the clearance.
         min_lowering_m: a lowering shorter than this is not run (already at release height).
+        lowering_fractions: the lowering's depths tried in turn, as fractions of the full one,
+            when the full one cannot be solved or would sweep the arm into the bin.
         resolve_restarts: IK restarts when a pose is re-solved during execution (the carry
             for the object's real position, the retreat): seeded by the plan, one suffices.
         park_xy_m: where removed objects are parked (x, y; object k at x + k), far outside
@@ -72,6 +75,7 @@ class ExecutionConfig:
     release_gap_m: float = 0.01
     nudge_extra_m: float = 0.0005
     min_lowering_m: float = 0.01
+    lowering_fractions: tuple[float, ...] = (1.0, 0.75, 0.5, 0.25)
     resolve_restarts: int = 1
     park_xy_m: tuple[float, float] = (10.0, 10.0)
 
@@ -81,6 +85,12 @@ class ExecutionConfig:
         for name in ("pregrasp_distance_m", "lift_height_m", "carry_clearance_m"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"execution.{name} must be positive, got {getattr(self, name)}")
+        fr = self.lowering_fractions
+        if not fr or fr[0] != 1.0 or any(not 0 < b < a for a, b in pairwise(fr)):
+            raise ValueError(
+                f"execution.lowering_fractions {list(fr)}: start at 1.0 (the full lowering) and "
+                "decrease, every value above 0"
+            )
 
 
 @dataclass(frozen=True)

@@ -135,8 +135,8 @@ def _carry(x: _Execution) -> Verdict:
 def _release(x: _Execution) -> Verdict:
     """Lower the object toward the bin floor on a checked vertical line, open, and judge where
     the object came to rest. A lowering that cannot be solved or would sweep the arm into the
-    bin is not run: the hand opens where it is, over the bin (a higher drop, not a failure),
-    and the detail says so."""
+    bin is tried shorter (``execution.lowering_fractions``); when none can be run the hand opens
+    where it is, over the bin. A higher release is not a failure; the detail says so."""
     env, d, panda, probe = x.env, x.env.data, x.env.panda, x.env.probe
     cfg = env.config
     note = ""
@@ -144,18 +144,26 @@ def _release(x: _Execution) -> Verdict:
     if drop > cfg.execution.min_lowering_m:
         env.ik.sync(d)
         here = Pose(*panda.tcp_pose(d))
-        path = env.ik.solve_line(
-            here,
-            here.position - np.array([0.0, 0.0, drop]),
-            cfg.execution.lift_segments,
-            panda.arm_q(d),
-        )
-        waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
-        problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
-        if problem:
-            note = f" (released {drop * 100:.0f} cm higher: lowering {problem})"
+        first_problem = None
+        for fraction in cfg.execution.lowering_fractions:
+            depth = fraction * drop
+            path = env.ik.solve_line(
+                here,
+                here.position - np.array([0.0, 0.0, depth]),
+                cfg.execution.lift_segments,
+                panda.arm_q(d),
+            )
+            waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
+            problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
+            if not problem:
+                break
+            first_problem = first_problem or problem
         else:
-            traj = _line_trajectory(env, waypoints, drop, "lift")
+            depth = 0.0
+        if first_problem:
+            note = f" (released {(drop - depth) * 100:.0f} cm higher: lowering {first_problem})"
+        if depth > 0.0:
+            traj = _line_trajectory(env, waypoints, depth, "lift")
             reason = env.stepper.follow(traj, (x.hold,))
             if reason:
                 return Outcome.DROPPED, x.target, f"lowering into the bin: {reason}"

@@ -1,0 +1,76 @@
+"""Replay recorded isolated attempts with today's code: does a change turn these outcomes?
+
+    python bench/replay_attempts.py RUN [RUN ...] --detail "not in the bin" [--outcome dropped]
+        [--sample N] [--out replay.csv]
+
+Selects isolated attempts of the runs' ``attempts.csv`` whose detail contains ``--detail`` (and
+whose outcome is ``--outcome``), replays each from its object, seed and planner with the run's
+trial config (``run.json``), and prints old -> new per attempt and a transition table. A replay
+of unchanged code gives the recorded outcome (same seed, same trial). One process; pair it with
+``--sample`` of the successes to check that a fix breaks none.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections import Counter
+from pathlib import Path
+
+import pandas as pd
+
+from hsqbench.sim.trial import load_trial_config, run_isolated_trial
+
+
+def _selected(run: Path, args: argparse.Namespace) -> pd.DataFrame:
+    rows = pd.read_csv(run / "attempts.csv")
+    rows = rows[rows.experiment == "isolated"]
+    if args.detail:
+        rows = rows[rows.detail.str.contains(args.detail, regex=False, na=False)]
+    if args.outcome:
+        rows = rows[rows.outcome == args.outcome]
+    if args.sample and len(rows) > args.sample:
+        rows = rows.sample(args.sample, random_state=args.sample_seed)
+    rows = rows.assign(
+        trial_config=json.loads((run / "run.json").read_text())["config"]["trial_config"]
+    )
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("runs", nargs="+", type=Path)
+    p.add_argument("--detail", default="", help="substring of the attempt's detail")
+    p.add_argument("--outcome", default="", help="only attempts with this recorded outcome")
+    p.add_argument("--sample", type=int, default=0, help="at most this many per run, drawn")
+    p.add_argument("--sample-seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="CSV of key, old, new, new detail")
+    args = p.parse_args(argv)
+    rows = pd.concat([_selected(run, args) for run in args.runs])
+    if rows.empty:
+        print("no attempt matches", file=sys.stderr)
+        return 1
+    out = []
+    for r in rows.itertuples():
+        obj = r.trial_key.split("/")[3]  # isolated/<planner>/s<seed>/<object>/<index>
+        attempt = run_isolated_trial(obj, int(r.seed), r.planner, load_trial_config(r.trial_config))
+        new = attempt.attempts[0]
+        out.append(
+            {
+                "trial_key": r.trial_key,
+                "old": r.outcome,
+                "new": new.outcome.value,
+                "detail": new.detail,
+            }
+        )
+        print(f"{r.trial_key}: {r.outcome} -> {new.outcome.value} | {new.detail}", flush=True)
+    for (old, new), n in sorted(Counter((o["old"], o["new"]) for o in out).items()):
+        print(f"{old} -> {new}: {n}")
+    if args.out:
+        pd.DataFrame(out).to_csv(args.out, index=False)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
