@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from hsqbench.cli import main
 from hsqbench.commands.ablate import ablation_planner_list
 from hsqbench.planner.additions import AdditionsConfig
+from hsqbench.planner.config import load_planner_config
 from hsqbench.planner.registry import planner_names
 
 
 def test_the_list_is_hsq_the_paper_and_one_planner_per_addition() -> None:
     names = ablation_planner_list(None)
     assert names[:2] == ["hsq", "hsq-paper"]
-    assert len(names) == 2 + len(AdditionsConfig.names())
+    on = [a for a in AdditionsConfig.names() if a not in load_planner_config().additions.off()]
+    assert names[2:] == [f"hsq-no-{a.replace('_', '-')}" for a in on]
     assert set(names) <= set(planner_names())
     assert ablation_planner_list(["sweep"], ("antipodal",)) == [
         "hsq",
@@ -23,6 +27,18 @@ def test_the_list_is_hsq_the_paper_and_one_planner_per_addition() -> None:
     ]
     with pytest.raises(ValueError, match="unknown addition"):
         ablation_planner_list(["no_such_thing"])
+
+
+def test_an_addition_off_by_default_is_not_ablated(monkeypatch) -> None:
+    """hsq-no-<name> of a switch the default config has off would be hsq itself."""
+    import hsqbench.planner.config as planner_config
+
+    loaded = load_planner_config()
+    off = replace(loaded, additions=replace(loaded.additions, sweep=False))
+    monkeypatch.setattr(planner_config, "load_planner_config", lambda *a, **k: off)
+    assert "hsq-no-sweep" not in ablation_planner_list(None)
+    with pytest.raises(ValueError, match=r"\['sweep'\] are off in configs/planner.yaml"):
+        ablation_planner_list(["sweep"])
 
 
 def test_the_command_runs_the_benchmark_with_that_list(monkeypatch, tmp_path) -> None:

@@ -48,18 +48,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def ablation_planner_list(additions: list[str] | None, extra: tuple[str, ...] = ()) -> list[str]:
-    """``hsq``, ``hsq-paper``, then ``hsq-no-<name>`` per addition, then ``extra``.
+    """``hsq``, ``hsq-paper``, then ``hsq-no-<name>`` per addition (default: each one that is on
+    in ``configs/planner.yaml``), then ``extra``.
 
     Raises:
-        ValueError: an unknown addition (the message lists the known ones).
+        ValueError: an unknown addition, or one that is off by default (``hsq-no-<name>`` would
+            be hsq itself); the message lists the choices.
     """
     from hsqbench.planner.additions import AdditionsConfig, planner_name
+    from hsqbench.planner.config import load_planner_config
 
     known = AdditionsConfig.names()
-    chosen = known if additions is None else list(additions)
+    off = load_planner_config().additions.off()
+    on = [a for a in known if a not in off]
+    chosen = on if additions is None else list(additions)
     unknown = [a for a in chosen if a not in known]
     if unknown:
         raise ValueError(f"unknown addition(s) {unknown}; known: {', '.join(known)}")
+    already = [a for a in chosen if a in off]
+    if already:
+        raise ValueError(
+            f"addition(s) {already} are off in configs/planner.yaml already (hsq-no-<name> "
+            f"would be hsq); on: {', '.join(on)}"
+        )
     names = ["hsq", "hsq-paper", *(planner_name(a) for a in chosen), *extra]
     return list(dict.fromkeys(names))
 
