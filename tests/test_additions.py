@@ -227,9 +227,11 @@ def test_hsq_paper_and_the_ablation_planners_are_registered() -> None:
     assert paper.name == "hsq-paper" and set(paper.config.additions.off()) == set(ADDITIONS)
     one = get_planner("hsq-no-unseen-waiver")
     assert one.name == "hsq-no-unseen-waiver"
-    assert set(one.config.additions.off()) == {"unseen_waiver", "support_facing"}
-    # hsq is the file's default: support_facing off (measured in trials, configs/planner.yaml).
-    assert get_planner("hsq").config.additions.off() == ["support_facing"]
+    assert set(one.config.additions.off()) == {
+        "unseen_waiver",
+        *load_planner_config().additions.off(),
+    }
+    assert get_planner("hsq").config.additions.off() == load_planner_config().additions.off()
 
 
 def test_hsq_paper_keeps_the_table_rule_and_labels_its_results() -> None:

@@ -142,7 +142,7 @@ class AdditionsConfig:
     duplicate_lines: bool = True
     opening_margin: bool = True
     support_fraction: bool = True
-    support_facing: bool = False
+    support_facing: bool = True
     unseen_waiver: bool = True
     sweep: bool = True
 
