@@ -110,10 +110,10 @@ def _sweeps(args: argparse.Namespace) -> list:
         ]
     else:
         sweeps = [load_sweep_config(s) for s in args.sweeps]
+    from dataclasses import replace
+
     out = []
     for sweep in sweeps:
-        from dataclasses import replace
-
         changes = {}
         protocol_changes = {}
         if args.seeds is not None:

@@ -132,37 +132,45 @@ def _carry(x: _Execution) -> Verdict:
     return None
 
 
+def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, float, str]:
+    """The deepest lowering of the TCP by ``drop`` x ``execution.lowering_fractions`` whose line
+    can be solved and is clear of table and bin: ``(waypoints, depth, problem)``, where
+    ``problem`` is the full lowering's (empty when it can be made) and ``waypoints`` is None
+    when none can."""
+    d, panda = env.data, env.panda
+    env.ik.sync(d)
+    here = Pose(*panda.tcp_pose(d))
+    first_problem = ""
+    for fraction in env.config.execution.lowering_fractions:
+        depth = fraction * drop
+        path = env.ik.solve_line(
+            here,
+            here.position - np.array([0.0, 0.0, depth]),
+            env.config.execution.lift_segments,
+            panda.arm_q(d),
+        )
+        waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
+        problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
+        if not problem:
+            return waypoints, depth, first_problem
+        first_problem = first_problem or problem
+    return None, 0.0, first_problem
+
+
 def _release(x: _Execution) -> Verdict:
     """Lower the object toward the bin floor on a checked vertical line, open, and judge where
     the object came to rest. A lowering that cannot be solved or would sweep the arm into the
     bin is tried shorter (``execution.lowering_fractions``); when none can be run the hand opens
     where it is, over the bin. A higher release is not a failure; the detail says so."""
-    env, d, panda, probe = x.env, x.env.data, x.env.panda, x.env.probe
+    env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
     note = ""
     drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
     if drop > cfg.execution.min_lowering_m:
-        env.ik.sync(d)
-        here = Pose(*panda.tcp_pose(d))
-        first_problem = None
-        for fraction in cfg.execution.lowering_fractions:
-            depth = fraction * drop
-            path = env.ik.solve_line(
-                here,
-                here.position - np.array([0.0, 0.0, depth]),
-                cfg.execution.lift_segments,
-                panda.arm_q(d),
-            )
-            waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
-            problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
-            if not problem:
-                break
-            first_problem = first_problem or problem
-        else:
-            depth = 0.0
-        if first_problem:
-            note = f" (released {(drop - depth) * 100:.0f} cm higher: lowering {first_problem})"
-        if depth > 0.0:
+        waypoints, depth, problem = _lowering(env, drop)
+        if problem:
+            note = f" (released {(drop - depth) * 100:.0f} cm higher: lowering {problem})"
+        if waypoints is not None:
             traj = _line_trajectory(env, waypoints, depth, "lift")
             reason = env.stepper.follow(traj, (x.hold,))
             if reason:
