@@ -24,7 +24,8 @@ from hsqbench.sim.trial import load_trial_config, run_isolated_trial
 
 
 def _selected(run: Path, args: argparse.Namespace) -> pd.DataFrame:
-    rows = pd.read_csv(run / "attempts.csv")
+    csv = run / "attempts.csv"
+    rows = pd.read_csv(csv if csv.exists() else run / "attempts.csv.gz")
     rows = rows[rows.experiment == "isolated"]
     if args.detail:
         rows = rows[rows.detail.str.contains(args.detail, regex=False, na=False)]

@@ -317,3 +317,20 @@ def test_an_object_that_cannot_be_built_is_recorded_skipped_and_retried(tmp_path
     )
     assert (again.ran, again.errors) == (len(with_bowl), 0)
     assert _comparable(run_dir) == _comparable(ref)
+
+
+def test_a_gzipped_committed_run_is_read_and_not_resumed(tmp_path) -> None:
+    import gzip
+
+    from hsqbench.experiment.report import load_run
+
+    run_dir = tmp_path / "r"
+    run_benchmark(SMALL, run_dir, backend=FakeBackend(), progress=False)
+    plain = load_run(run_dir)
+    csv_path = run_dir / "attempts.csv"
+    (run_dir / "attempts.csv.gz").write_bytes(gzip.compress(csv_path.read_bytes()))
+    csv_path.unlink()
+    packed = load_run(run_dir)
+    assert packed.attempts.equals(plain.attempts) and len(packed.attempts) > 0
+    with pytest.raises(ResultsError, match="gunzip it to resume"):
+        run_benchmark(SMALL, run_dir, backend=FakeBackend(), resume=True, progress=False)

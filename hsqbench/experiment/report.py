@@ -81,7 +81,7 @@ def load_run(run_dir: str | Path) -> RunData:
         FileNotFoundError: ``run_dir`` has no ``attempts.csv``.
     """
     run_dir = Path(run_dir)
-    if not (run_dir / "attempts.csv").exists():
+    if not any((run_dir / name).exists() for name in ("attempts.csv", "attempts.csv.gz")):
         raise FileNotFoundError(
             f"{run_dir}: no attempts.csv; give the folder of a run (results/<run>)"
         )

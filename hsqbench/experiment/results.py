@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import gzip
 import io
 import json
 import os
@@ -120,15 +121,18 @@ class ParsedFile:
 def read_rows(path: Path, columns: tuple[str, ...], allow_older: bool = False) -> ParsedFile:
     """Parse a results CSV, dropping a trailing partial line (a write cut by a kill).
 
+    ``path`` or, when it is absent, ``path`` + ``.gz`` is read.
     ``allow_older``: a file written by an earlier version, whose columns are a subset of
     ``columns``, is read with the missing columns empty (for reports; never for appending).
 
     Raises:
         ResultsError: the header differs from ``columns`` or a complete line is malformed.
     """
-    if not path.exists():
+    packed = path.with_name(path.name + ".gz")
+    if not path.exists() and not packed.exists():
         return ParsedFile()
-    data = path.read_bytes()
+    # A committed run may hold its CSV gzipped (large runs); it is read, never appended to.
+    data = path.read_bytes() if path.exists() else gzip.decompress(packed.read_bytes())
     partial = bool(data) and not data.endswith(b"\n")
     if partial:
         data = data[: data.rfind(b"\n") + 1]

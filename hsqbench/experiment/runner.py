@@ -283,6 +283,10 @@ def _existing_run(
     folder checks: ``force`` moves an old run aside; without ``resume`` an existing run is an
     error."""
     meta = store.read_meta()
+    if resume and (run_dir / f"{ATTEMPTS_FILE}.gz").exists():
+        raise ResultsError(
+            f"{run_dir}: its {ATTEMPTS_FILE} is gzipped (a committed run); gunzip it to resume"
+        )
     has_data = meta is not None or (run_dir / ATTEMPTS_FILE).exists()
     if has_data and force:
         moved = _move_aside(run_dir)
