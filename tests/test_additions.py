@@ -165,6 +165,12 @@ def case_sweep(cfg: PlannerConfig):
     return line_reasons(cfg, 0.02, np.concatenate([two_faces(0.02), wall]))
 
 
+def case_hidden_bodies(cfg: PlannerConfig):
+    # A hidden body where the open +x finger goes, which the cloud does not show.
+    body = patch((0.05, 0.0, 0.0), (1, 0, 0), radius=0.02)
+    return line_reasons(cfg, 0.02, two_faces(0.02), body_points=body)
+
+
 #: name -> (case, check(with, without)).
 CASES = {
     "thinning": (case_thinning, lambda on, off: on < 0.25 and off == 1.0),
@@ -185,6 +191,7 @@ CASES = {
     "support_facing": (case_support_facing, lambda on, off: on == {"support"} and off == {""}),
     "unseen_waiver": (case_unseen_waiver, lambda on, off: on == {""} and off == {"support"}),
     "sweep": (case_sweep, lambda on, off: on == {"sweep"} and off == {""}),
+    "hidden_bodies": (case_hidden_bodies, lambda on, off: on == {"hidden"} and off == {""}),
 }
 
 

@@ -237,6 +237,7 @@ def test_result_is_reproducible_and_serialisable() -> None:
         "table",
         "collision",
         "sweep",
+        "hidden",
     ]
 
 

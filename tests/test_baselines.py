@@ -25,6 +25,7 @@ from hsqbench.planner.candidates import CandidateSet
 from hsqbench.planner.cleaning import clean_cloud
 from hsqbench.planner.elimination import eliminate, unobservable_contacts
 from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.hidden_bodies import body_obstacles
 from hsqbench.planner.registry import get_planner
 from hsqbench.superquadric import point_to_surface_alpha
 from tests.shapes import Box, l_of_two_boxes, union_cloud, visible_mask
@@ -398,6 +399,12 @@ def test_a_flying_pixel_in_a_finger_path_no_longer_removes_a_baseline_grasp(name
 def test_camera_positions_waive_support_for_the_baselines_as_for_hsq(name) -> None:
     points = seen([yawed_box(20.0)], seed=2)
     planner = get_planner(name)
+    # The waiver alone: with the cameras, single-sq's superquadric also gives rule 6's hidden
+    # bodies, which replace the facing test (test_single_sq_runs_the_hidden_body_rule).
+    pcfg = planner.planner_config
+    planner.planner_config = dataclasses.replace(
+        pcfg, grasp=dataclasses.replace(pcfg.grasp, body_rule=False)
+    )
     blind = planner.plan(points, PlanningContext(support_plane=TABLE, seed=0))
     context = PlanningContext(support_plane=TABLE, seed=0, camera_positions=CAMERAS[:1])
     seeing = planner.plan(points, context)
@@ -417,6 +424,32 @@ def test_camera_positions_waive_support_for_the_baselines_as_for_hsq(name) -> No
     cloud = clean_cloud(points, resolve_config(BaselinesConfig().planner).cleaning).points
     again = _fresh_elimination(seeing, cloud, CAMERAS[:1])
     np.testing.assert_array_equal(again.rejected_by, after)
+
+
+def test_single_sq_runs_the_hidden_body_rule_with_the_cameras_and_antipodal_does_not() -> None:
+    points = seen([yawed_box(20.0)], seed=2)
+    context = PlanningContext(support_plane=TABLE, seed=0, camera_positions=CAMERAS[:1])
+    single = get_planner("single-sq").plan(points, context)
+    grasp_cfg = resolve_config(BaselinesConfig().planner).grasp
+    cloud = clean_cloud(points, resolve_config(BaselinesConfig().planner).cleaning).points
+    sqs = [h.superquadric for h in single.hidden_superquadrics]
+    bodies = body_obstacles(sqs, cloud, grasp_cfg, CAMERAS[:1], np.asarray(TABLE))
+    assert len(bodies) > 0
+    cands = CandidateSet(single.candidates.lines, single.candidates.roll_angles)
+    eliminate(cands, cloud, GRIPPER, grasp_cfg, np.asarray(TABLE), 0, None, CAMERAS[:1], bodies)
+    np.testing.assert_array_equal(cands.rejected_by, single.candidates.rejected_by)
+    plain = CandidateSet(single.candidates.lines, single.candidates.roll_angles)
+    eliminate(plain, cloud, GRIPPER, grasp_cfg, np.asarray(TABLE), 0, None, CAMERAS[:1])
+    assert not np.array_equal(plain.rejected_by, single.candidates.rejected_by)
+    # The antipodal sampler has no superquadric: its verdicts are the rules without rule 6.
+    antipodal = get_planner("antipodal").plan(points, context)
+    assert "hidden" not in set(antipodal.candidates.rejected_by)
+    again = _fresh_elimination(
+        antipodal,
+        clean_cloud(points, resolve_config(BaselinesConfig().planner).cleaning).points,
+        CAMERAS[:1],
+    )
+    np.testing.assert_array_equal(again.rejected_by, antipodal.candidates.rejected_by)
 
 
 @pytest.mark.parametrize("name", ["single-sq", "antipodal"])

@@ -33,6 +33,7 @@ NOT_DEFAULTS = {
     "paper",
     "paper3",
     "paper3_facing",
+    "paper3_bodies",
     "paper_pile",
     "paper_ablation",
     "ycb_ablation",
@@ -40,6 +41,7 @@ NOT_DEFAULTS = {
     "ycb",
     "ycb3",
     "ycb3_facing",
+    "ycb3_bodies",
     "scene_resting",
     "trial_resting",
 }

@@ -3,6 +3,8 @@ roll-arc collision test agrees with transforming every point into every candidat
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -329,3 +331,19 @@ def test_duplicate_lines_keep_the_best_fitting_copy() -> None:
     eliminate(cands, two_faces(0.02), GRIPPER, CONFIG, line_priority=np.array([0.5, 0.9, 0.5, 0.5]))
     per_line = cands.rejected_by.reshape(4, -1)
     assert set(per_line[0]) == {"duplicate"} and "duplicate" not in set(per_line[1])
+
+
+def test_where_rule_6_runs_the_facing_test_does_not() -> None:
+    # The +x contact sees an edge (a surface 60 deg from the line), the -x one a face.
+    slanted = patch((0.02, 0, 0), (np.cos(np.pi / 3), 0.0, np.sin(np.pi / 3)), radius=0.009)
+    cloud = np.concatenate([slanted, patch((-0.02, 0, 0), (-1, 0, 0))])
+    strict = one_line(0.02)
+    eliminate(strict, cloud, GRIPPER, CONFIG)
+    assert set(reasons(strict)) == {"support"}
+    modelled = one_line(0.02)
+    eliminate(modelled, cloud, GRIPPER, CONFIG, body_points=np.zeros((0, 3)))
+    assert set(reasons(modelled)) == {""}
+    off = one_line(0.02)
+    cfg = dataclasses.replace(CONFIG, body_rule=False)
+    eliminate(off, cloud, GRIPPER, cfg, body_points=np.zeros((0, 3)))
+    assert set(reasons(off)) == {"support"}

@@ -120,6 +120,11 @@ ADDITIONS: dict[str, Addition] = {
         {"sweep_rule": False},
         "the open fingers and the palm's approach path must be free of cloud points",
     ),
+    "hidden_bodies": Addition(
+        "grasp",
+        {"body_rule": False},
+        "the hand must not enter the hidden superquadrics where no camera saw free space",
+    ),
 }
 
 
@@ -145,6 +150,7 @@ class AdditionsConfig:
     support_facing: bool = True
     unseen_waiver: bool = True
     sweep: bool = True
+    hidden_bodies: bool = True
 
     def __post_init__(self) -> None:
         for name in self.names():

@@ -34,6 +34,7 @@ from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_con
 from hsqbench.planner.elimination import eliminate
 from hsqbench.planner.grasp import Grasp
 from hsqbench.planner.gripper import GripperModel, load_gripper
+from hsqbench.planner.hidden_bodies import body_obstacles
 from hsqbench.planner.scoring import fit_factors, score_candidates
 from hsqbench.planner.synthesis import synthesize
 from hsqbench.planner.table_lines import level_table_lines
@@ -297,8 +298,11 @@ def plan_from_hidden(
     betas = np.array([h.beta for h in hidden], dtype=np.float64)
     h_alpha, h_beta = fit_factors(alphas, betas, cfg)
     priority = (h_alpha * h_beta)[cands.lines.source]
+    # Rule 6 needs the cameras: without them an overshooting fit cannot be told from a body.
+    use_bodies = cfg.body_rule and cameras is not None
+    bodies = body_obstacles(superquadrics, cloud, cfg, cameras, plane) if use_bodies else None
     report = eliminate(
-        cands, cloud, grip, cfg, plane, 0 if seed is None else seed, priority, cameras
+        cands, cloud, grip, cfg, plane, 0 if seed is None else seed, priority, cameras, bodies
     )
     timings["elimination"] = time.perf_counter() - start
 

@@ -131,6 +131,12 @@ class GraspConfig:
     approach_distance_m: float = 0.05
     table_clearance_m: float = 0.003
     max_obstacle_points: int = 0
+    # Rule 6, the hidden bodies (body_rule: set by additions.hidden_bodies).
+    body_rule: bool = True
+    body_margin_m: float = 0.003
+    body_spacing_m: float = 0.005
+    body_pixel_m: float = 0.004
+    body_carve_margin_m: float = 0.004
     # Scoring.
     q_alpha: float = 0.002
     q_gamma: float = 0.5
@@ -153,6 +159,8 @@ class GraspConfig:
             "q_delta": self.q_delta,
             "contact_radius_m": self.contact_radius_m,
             "alpha_unit_m": self.alpha_unit_m,
+            "body_spacing_m": self.body_spacing_m,
+            "body_pixel_m": self.body_pixel_m,
         }
         for key, value in positive.items():
             if not value > 0:
@@ -178,6 +186,8 @@ class GraspConfig:
             "approach_distance_m": self.approach_distance_m,
             "table_clearance_m": self.table_clearance_m,
             "max_obstacle_points": self.max_obstacle_points,
+            "body_margin_m": self.body_margin_m,
+            "body_carve_margin_m": self.body_carve_margin_m,
         }
         for key, value in non_negative.items():
             if not value >= 0:

@@ -28,6 +28,11 @@ that removed it (``CandidateSet.rejected_by``):
    face goes, whatever the object. Downward faces are excluded (``unseen_max_down_deg``): from
    above they are never seen, and a hidden superquadric fitted to the top of a body ends in a
    downward face inside it.
+   Where rule 6 runs (hidden bodies, which need the cameras) the facing test does not: besides
+   edges, it was what kept fingers out of bodies no camera saw (no points there, so the collision
+   rules cannot), and it also removed real contacts on thin walls, bags and tools lying flat,
+   whose support cylinders hold more of the top surface than of the side. Rule 6 models those
+   bodies instead.
 The gripper approaches open to ``min(l_w, 2 h + 2 contact_depth_m)`` (``approach_openings``,
 kept as ``ClosingLines.openings`` and ``Grasp.approach_width``): its fingers then clear the contact
 surface (noise and fit error included) and close only through it, so the open fingers are the
@@ -44,6 +49,11 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
    volume the hand sweeps also removes the pose: the open fingers, and the palm swept back by
    ``approach_distance_m`` (the straight-line approach from the pre-grasp pose). E.g. the body of
    a mug beside a finger that grips its handle.
+6. ``hidden`` (addition, ``body_rule``): the same test against obstacle points that model what
+   no camera saw: the surfaces of the hidden superquadrics, shrunk by ``body_margin_m``, less
+   the samples a camera saw through (:mod:`~hsqbench.planner.hidden_bodies`). E.g. the body of
+   a mug behind the handle, where the cloud holds no point. Only planners with superquadrics
+   pass such points (``body_points``); for the others the rule removes nothing.
 
 Rules 4 and 5 are exact for the box model of the gripper and cost O(lines x points), not
 O(candidates x points): in the frame of a line (``s`` along it, polar ``r, theta`` about it) a
@@ -107,6 +117,8 @@ RULE_DESCRIPTIONS = {
     "table": "fingers or palm would enter the support plane",
     "collision": "paper's test: object points outside the jaw's reach between the fingers",
     "sweep": "a cloud point in the open fingers or in the palm's approach path",
+    "hidden": "the open fingers or the palm's approach path enter a hidden superquadric where "
+    "no camera saw free space",
 }
 
 
@@ -206,12 +218,14 @@ def _supported(
     kappa: int,
     camera_positions: NDArray | None,
     support_plane: NDArray | None,
+    facing: bool = True,
 ) -> NDArray[np.bool_]:
     """(len(lines),): lines that pass rule 2 (both contacts supported, or one supported and the
-    other unseen by every camera)."""
+    other unseen by every camera); ``facing``: with the facing test."""
     stats = support_stats(points, cands, lines, config)
-    facing = stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
-    supported = (stats.counts >= kappa) & facing
+    supported = stats.counts >= kappa
+    if facing:
+        supported &= stats.cos_tilt >= np.cos(np.deg2rad(config.support_max_tilt_deg))
     if camera_positions is not None:
         unseen = unobservable_contacts(cands, lines, camera_positions, config, support_plane)
         ok = np.all(supported | unseen, axis=1) & np.any(supported, axis=1)
@@ -246,12 +260,15 @@ def eliminate(
     seed: int = 0,
     line_priority: NDArray | None = None,
     camera_positions: NDArray | None = None,
+    body_points: NDArray | None = None,
 ) -> EliminationReport:
     """Run the rules on ``cands`` in place (fills ``rejected_by``); returns the counts.
 
     ``line_priority`` (L,) decides which of duplicate lines stays (higher wins; default: the
     first); the planner passes ``h_alpha h_beta`` of each line's superquadric.
     ``camera_positions`` (C, 3): with them, a contact no camera can see needs no support (rule 2).
+    ``body_points`` (M, 3): rule 6's obstacles (:func:`~hsqbench.planner.hidden_bodies.
+    body_obstacles`); None: the rule removes nothing.
     """
     n_roll = cands.n_roll
     L = cands.lines
@@ -281,7 +298,11 @@ def eliminate(
     spacing = cloud_spacing(points, seed)
     kappa = support_kappa(spacing, config)
     lines = alive_lines()
-    ok = _supported(points, cands, lines, config, kappa, camera_positions, support_plane)
+    # Rule 6 replaces the facing test where it runs (see the module docstring).
+    bodies = config.body_rule and body_points is not None
+    ok = _supported(
+        points, cands, lines, config, kappa, camera_positions, support_plane, facing=not bodies
+    )
     apply("support", lines, ~ok)
 
     openings = approach_openings(L.half_lengths, gripper, config)
@@ -306,6 +327,13 @@ def eliminate(
         apply("sweep", lines, body_hits(points, cands, lines, swept, max_points=tolerated))
     else:
         remaining["sweep"] = remaining["collision"]
+
+    if config.body_rule and body_points is not None:
+        lines = alive_lines()
+        swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
+        apply("hidden", lines, body_hits(body_points, cands, lines, swept, max_points=tolerated))
+    else:
+        remaining["hidden"] = remaining["sweep"]
 
     names = np.array((KEPT, *REJECTION_REASONS), dtype=cands.rejected_by.dtype)
     cands.rejected_by = names[code.ravel()]
