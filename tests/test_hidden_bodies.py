@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.hidden_bodies import body_obstacles, seen_free, shrunk_surface_samples
@@ -30,6 +31,12 @@ def test_shrunk_samples_lie_a_margin_inside_and_thin_fits_give_none() -> None:
     assert np.all(sq.inside_outside(samples) < 1.0)
     # Every semi-axis 3 mm shorter: no sample reaches within 2.5 mm of the true surface.
     assert np.all(sq.radial_distance(samples) > 0.8 * CONFIG.body_margin_m)
+    # No gap a finger could pass: every point of the shrunk surface has a sample within 5 mm.
+    m = CONFIG.body_margin_m
+    shrunk = Superquadric(0.3, 0.8, [0.03 - m, 0.02 - m, 0.05 - m], translation=[0.1, 0.0, 0.05])
+    dense, _ = shrunk.sample_surface(0.001)
+    gap, _ = cKDTree(samples).query(dense)
+    assert gap.max() <= CONFIG.body_spacing_m
     # A copy of a fit adds no samples (one per 5 mm voxel).
     assert len(samples) == len(shrunk_surface_samples([sq], CONFIG))
     wall = Superquadric(0.1, 0.1, [0.03, 0.004, 0.05])
