@@ -113,6 +113,26 @@ def test_hsq_plan_prints_a_table_and_writes_json(tmp_path, capsys) -> None:
     assert data["remaining"]["synthesised"] > 0 and "recovery" in data["timings"]
 
 
+def test_cameras_reach_the_planner_and_the_json(tmp_path, capsys) -> None:
+    path = write_cloud(tmp_path / "box.npy", box_cloud(2))
+    out_json = tmp_path / "plan.json"
+    CentroidPlanner.seen.clear()
+    cameras = ["--camera", "-0.45", "-0.45", "0.55", "--camera", "0.45", "0.45", "0.55"]
+    argv = ["plan", str(path), "--planner", "test-centroid", "--json", str(out_json), *cameras]
+    assert main(argv) == 0
+    _, context = CentroidPlanner.seen[-1]
+    np.testing.assert_allclose(context.camera_positions, [[-0.45, -0.45, 0.55], [0.45, 0.45, 0.55]])
+    assert json.loads(out_json.read_text())["input"]["camera_positions"] == [
+        [-0.45, -0.45, 0.55],
+        [0.45, 0.45, 0.55],
+    ]
+    assert main(["plan", str(path), "--planner", "test-centroid"]) == 0
+    assert CentroidPlanner.seen[-1][1].camera_positions is None
+    with pytest.raises(SystemExit) as exc:
+        main(["plan", str(path), "--camera", "1", "2"])
+    assert exc.value.code == 2 and "--camera" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     ("content", "name", "needle"),
     [

@@ -11,7 +11,9 @@ HELP = "plan grasps on a point cloud (.ply, .pcd, .npy, .xyz) and print the best
 _EPILOG = """\
 The cloud is in metres, in any frame; --support-plane gives the table in that frame as
 a b c d with a x + b y + c z + d = 0 and (a, b, c) the normal toward the free side
-(e.g. 0 0 1 0 for a table at z = 0). Grasp frame: P_G is the closing point (between the pads),
+(e.g. 0 0 1 0 for a table at z = 0). --camera X Y Z (once per camera, same frame) gives the
+cameras' centres: contacts none of them sees then need no support, and the hand is kept out of
+the hidden superquadrics where no camera saw free space (rule 6). Grasp frame: P_G is the closing point (between the pads),
 'closing' the axis joining the pads, 'approach' the direction from the palm toward P_G.
 
 Exit status: 0 when grasps were found, 1 when none survived (the reason is printed),
@@ -40,6 +42,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs=4,
         metavar=("A", "B", "C", "D"),
         help="table plane a x + b y + c z + d = 0, normal toward the free side",
+    )
+    parser.add_argument(
+        "--camera",
+        type=float,
+        nargs=3,
+        action="append",
+        metavar=("X", "Y", "Z"),
+        help="a camera centre in the cloud's frame, metres (repeat for each camera)",
     )
     parser.add_argument(
         "--planner", default="hsq", metavar="NAME", help="registered planner (default: hsq)"
@@ -71,6 +81,8 @@ def _vec(v, digits: int) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from hsqbench.cloud_io import read_cloud
     from hsqbench.planner.api import PlanningContext
     from hsqbench.planner.registry import get_planner
@@ -82,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
         support_plane=tuple(args.support_plane) if args.support_plane else None,
         packed=args.packed,
         seed=args.seed,
+        camera_positions=None if args.camera is None else np.asarray(args.camera, dtype=float),
     )
     result = planner.plan(points, context)
     print(f"{args.cloud}: {points.shape[0]} points, planner {args.planner}")
@@ -105,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
             "seed": args.seed,
             "packed": args.packed,
             "support_plane": context.support_plane,
+            "camera_positions": args.camera,
             "code_version": code_version(),
         }
         args.json.parent.mkdir(parents=True, exist_ok=True)

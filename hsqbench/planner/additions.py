@@ -108,7 +108,8 @@ ADDITIONS: dict[str, Addition] = {
     "support_facing": Addition(
         "grasp",
         {"support_max_tilt_deg": 90.0},
-        "the support points must form a surface facing the finger (not an edge)",
+        "the support points must form a surface facing the finger (not an edge), where the"
+        " hidden-body rule does not run (it needs the cameras)",
     ),
     "unseen_waiver": Addition(
         "grasp",

@@ -277,7 +277,10 @@ def plan_from_hidden(
             blocks are levelled and lifted first (:mod:`hsqbench.planner.table_lines`).
         seed: for the subset used to estimate the cloud's spacing (None = 0).
         camera_positions: (C, 3) camera centres, metres; with them, contacts no camera can see
-            need no support (``grasp.unseen_incidence_deg``). None: every contact needs it.
+            need no support (``grasp.unseen_incidence_deg``), and rule 6 keeps the hand out of
+            the hidden superquadrics where no camera saw free space, in place of the support
+            rule's facing test (:mod:`hsqbench.planner.hidden_bodies`). None: every contact
+            needs support, and the facing test applies.
     """
     cloud = validate_cloud(points)
     cameras = validate_cameras(camera_positions)
@@ -348,7 +351,7 @@ def plan_grasps(
         seed: stage one's K-means seed (None = 0: deterministic by default).
         gripper: default: the gripper named in the config.
         camera_positions: (C, 3) camera centres, metres, if known: contacts no camera can see
-            then need no support (see :func:`plan_from_hidden`).
+            then need no support, and rule 6 (hidden bodies) runs (see :func:`plan_from_hidden`).
 
     Raises:
         ValueError: an empty, non-finite or badly shaped cloud; a bad plane or config.
