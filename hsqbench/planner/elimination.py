@@ -51,8 +51,8 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
    a mug beside a finger that grips its handle.
 6. ``hidden`` (addition, ``body_rule``): the same test against obstacle points that model what
    no camera saw: the surfaces of the hidden superquadrics, shrunk by ``body_margin_m``, less
-   the samples a camera saw through (:mod:`~hsqbench.planner.hidden_bodies`). E.g. the body of
-   a mug behind the handle, where the cloud holds no point. Only planners with superquadrics
+   the samples a camera saw through (:mod:`~hsqbench.planner.hidden_bodies`). E.g. a body
+   behind a handle that hides it from the cameras, where the cloud holds no point. Only planners with superquadrics
    pass such points (``body_points``); for the others the rule removes nothing.
 
 Rules 4 and 5 are exact for the box model of the gripper and cost O(lines x points), not

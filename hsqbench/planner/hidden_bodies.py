@@ -1,8 +1,8 @@
 """Elimination rule 6 (addition): the hand must not enter the hidden superquadrics.
 
 The collision and sweep rules see only the cloud, i.e. what the cameras saw. A body behind what
-they saw (the body of a mug behind its handle, the far half of a cup) holds no points, and a
-finger may be planned into it. Stage one's hidden superquadrics model that body. Their surfaces,
+they saw (behind a handle that hides it from the cameras, the far half of a hollow part) holds
+no points, and a finger may be planned into it. Stage one's hidden superquadrics model that body. Their surfaces,
 shrunk by ``body_margin_m`` (fit error) and sampled every ``body_spacing_m``, become obstacle
 points for the open fingers and the palm's approach path, like cloud points, except where a
 camera saw through them: a sample in front of the surface a camera measured along its ray (by
@@ -34,8 +34,9 @@ def shrunk_surface_samples(
 ) -> NDArray[np.float64]:
     """(M, 3): the surfaces of ``superquadrics`` with every semi-axis shortened by
     ``body_margin_m``, sampled every ``body_spacing_m`` and thinned to one sample per voxel of
-    that size (overlapping fits give one set). A superquadric thinner than twice the margin has
-    no interior beyond it and gives none."""
+    that size (overlapping fits give one set). A superquadric whose shrunk semi-axes are not
+    all over half the spacing (thinner than ``2 body_margin_m + body_spacing_m``, 11 mm: a wall,
+    which the cameras see) gives none: its shrunk body would be thinner than one spacing."""
     margin, spacing = config.body_margin_m, config.body_spacing_m
     parts = []
     for sq in superquadrics:
