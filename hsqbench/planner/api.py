@@ -302,8 +302,10 @@ def plan_from_hidden(
     h_alpha, h_beta = fit_factors(alphas, betas, cfg)
     priority = (h_alpha * h_beta)[cands.lines.source]
     # Rule 6 needs the cameras: without them an overshooting fit cannot be told from a body.
-    use_bodies = cfg.body_rule and cameras is not None
-    bodies = body_obstacles(superquadrics, cloud, cfg, cameras, plane) if use_bodies else None
+    # Its obstacles are built only if a candidate reaches it.
+    bodies = None
+    if cfg.body_rule and cameras is not None:
+        bodies = functools.partial(body_obstacles, superquadrics, cloud, cfg, cameras, plane)
     report = eliminate(
         cands, cloud, grip, cfg, plane, 0 if seed is None else seed, priority, cameras, bodies
     )

@@ -68,6 +68,7 @@ their public names stay importable from here.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -260,7 +261,7 @@ def eliminate(
     seed: int = 0,
     line_priority: NDArray | None = None,
     camera_positions: NDArray | None = None,
-    body_points: NDArray | None = None,
+    body_points: NDArray | Callable[[], NDArray] | None = None,
 ) -> EliminationReport:
     """Run the rules on ``cands`` in place (fills ``rejected_by``); returns the counts.
 
@@ -268,7 +269,8 @@ def eliminate(
     first); the planner passes ``h_alpha h_beta`` of each line's superquadric.
     ``camera_positions`` (C, 3): with them, a contact no camera can see needs no support (rule 2).
     ``body_points`` (M, 3): rule 6's obstacles (:func:`~hsqbench.planner.hidden_bodies.
-    body_obstacles`); None: the rule removes nothing.
+    body_obstacles`), or a function returning them, called only if a candidate reaches rule 6;
+    None: the rule removes nothing.
     """
     n_roll = cands.n_roll
     L = cands.lines
@@ -328,10 +330,11 @@ def eliminate(
     else:
         remaining["sweep"] = remaining["collision"]
 
-    if config.body_rule and body_points is not None:
-        lines = alive_lines()
+    lines = alive_lines()
+    if bodies and lines.size:
+        obstacles = body_points() if callable(body_points) else body_points
         swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
-        apply("hidden", lines, body_hits(body_points, cands, lines, swept, max_points=tolerated))
+        apply("hidden", lines, body_hits(obstacles, cands, lines, swept, max_points=tolerated))
     else:
         remaining["hidden"] = remaining["sweep"]
 
