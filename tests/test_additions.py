@@ -201,6 +201,7 @@ def test_every_addition_has_a_case_and_its_paper_values_name_real_fields() -> No
     for name, addition in ADDITIONS.items():
         section = getattr(defaults, addition.section)
         assert set(addition.paper) <= {f.name for f in dataclasses.fields(section)}, name
+        assert addition.superseded_by in (None, *set(ADDITIONS) - {name}), name
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

@@ -27,7 +27,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs="+",
         default=None,
         metavar="NAME",
-        help="only these additions (default: all; see configs/planner.yaml additions:)",
+        help="only these additions (default: each that is on and not superseded; see "
+        "configs/planner.yaml additions:)",
     )
     parser.add_argument(
         "--with",
@@ -49,19 +50,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def ablation_planner_list(additions: list[str] | None, extra: tuple[str, ...] = ()) -> list[str]:
     """``hsq``, ``hsq-paper``, then ``hsq-no-<name>`` per addition (default: each one that is on
-    in ``configs/planner.yaml``), then ``extra``.
+    in ``configs/planner.yaml``, less those superseded by another that is on, whose planner would
+    plan as hsq in every trial; each is left out with a line on stderr), then ``extra``.
 
     Raises:
         ValueError: an unknown addition, or one that is off by default (``hsq-no-<name>`` would
             be hsq itself); the message lists the choices.
     """
-    from hsqbench.planner.additions import AdditionsConfig, planner_name
+    import sys
+
+    from hsqbench.planner.additions import ADDITIONS, AdditionsConfig, planner_name
     from hsqbench.planner.config import load_planner_config
 
     known = AdditionsConfig.names()
     off = load_planner_config().additions.off()
     on = [a for a in known if a not in off]
-    chosen = on if additions is None else list(additions)
+    if additions is None:
+        chosen = []
+        for name in on:
+            by = ADDITIONS[name].superseded_by
+            if by is not None and by in on:
+                print(
+                    f"leaving out {planner_name(name)}: {by} takes its place where the cameras "
+                    f"are known, so it would plan as hsq in every trial (name it with "
+                    f"--additions {name} to run it anyway)",
+                    file=sys.stderr,
+                )
+            else:
+                chosen.append(name)
+    else:
+        chosen = list(additions)
     unknown = [a for a in chosen if a not in known]
     if unknown:
         raise ValueError(f"unknown addition(s) {unknown}; known: {', '.join(known)}")

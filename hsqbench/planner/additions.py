@@ -20,12 +20,14 @@ from typing import Any
 
 @dataclass(frozen=True)
 class Addition:
-    """One addition: the config section it acts on, the paper's values of its parameters, and a
-    sentence for reports."""
+    """One addition: the config section it acts on, the paper's values of its parameters, a
+    sentence for reports, and the addition that takes its place wherever the harness plans
+    (cameras known), if any: while that one is on, switching this one off changes no trial."""
 
     section: str
     paper: dict[str, Any]
     sentence: str
+    superseded_by: str | None = None
 
 
 #: Name -> the addition. The order is the planner's order (cleaning, stage one, stage two).
@@ -110,6 +112,7 @@ ADDITIONS: dict[str, Addition] = {
         {"support_max_tilt_deg": 90.0},
         "the support points must form a surface facing the finger (not an edge), where the"
         " hidden-body rule does not run (it needs the cameras)",
+        superseded_by="hidden_bodies",
     ),
     "unseen_waiver": Addition(
         "grasp",
