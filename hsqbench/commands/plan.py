@@ -13,8 +13,9 @@ The cloud is in metres, in any frame; --support-plane gives the table in that fr
 a b c d with a x + b y + c z + d = 0 and (a, b, c) the normal toward the free side
 (e.g. 0 0 1 0 for a table at z = 0). --camera X Y Z (once per camera, same frame) gives the
 cameras' centres: contacts none of them sees then need no support, and the hand is kept out of
-the hidden superquadrics where no camera saw free space (rule 6). Grasp frame: P_G is the closing point (between the pads),
-'closing' the axis joining the pads, 'approach' the direction from the palm toward P_G.
+the hidden superquadrics where no camera saw free space (rule 6).
+Grasp frame: P_G is the closing point (between the pads), 'closing' the axis joining the pads,
+'approach' the direction from the palm toward P_G.
 
 Exit status: 0 when grasps were found, 1 when none survived (the reason is printed),
 2 on bad input (unreadable, empty or non-finite cloud, bad option).

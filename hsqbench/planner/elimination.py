@@ -45,17 +45,18 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
    the line; cloud points between its end planes but outside it are obstacles, and a pose whose
    gripper body (two open fingers and the palm) holds any of them goes (more than
    ``max_obstacle_points`` of them: 0, the paper's rule, by default).
-5. ``sweep`` (addition, ``sweep_rule``): the paper only looks between the end planes. Any cloud point in the
-   volume the hand sweeps also removes the pose: the open fingers, and the palm swept back by
-   ``approach_distance_m`` (the straight-line approach from the pre-grasp pose). E.g. the body of
-   a mug beside a finger that grips its handle.
+5. ``sweep`` (addition, ``sweep_rule``): the paper only looks between the end planes. Any cloud
+   point in the volume the hand sweeps also removes the pose: the open fingers, and the palm
+   swept back by ``approach_distance_m`` (the straight-line approach from the pre-grasp pose).
+   E.g. the body of a mug beside a finger that grips its handle.
 6. ``hidden`` (addition, ``body_rule``): the same test against obstacle points that model what
    no camera saw: the surfaces of the hidden superquadrics, shrunk by ``body_margin_m``, less
    the samples a camera saw through (:mod:`~hsqbench.planner.hidden_bodies`). E.g. a body
-   behind a handle that hides it from the cameras, where the cloud holds no point. Only planners with superquadrics
-   pass such points (``body_points``); for the others the rule removes nothing.
+   behind a handle that hides it from the cameras, where the cloud holds no point. Only
+   planners with superquadrics pass such points (``body_points``); for the others the rule
+   removes nothing.
 
-Rules 4 and 5 are exact for the box model of the gripper and cost O(lines x points), not
+Rules 4 to 6 are exact for the box model of the gripper and cost O(lines x points), not
 O(candidates x points): in the frame of a line (``s`` along it, polar ``r, theta`` about it) a
 point is inside a box at roll ``phi`` iff ``s`` is within the box's extent along the closing axis
 and ``psi = theta - phi`` satisfies ``r cos(psi) in [z_lo, z_hi]`` and ``|r sin(psi)| <= y_half``:

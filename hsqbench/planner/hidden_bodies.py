@@ -2,12 +2,13 @@
 
 The collision and sweep rules see only the cloud, i.e. what the cameras saw. A body behind what
 they saw (behind a handle that hides it from the cameras, the far half of a hollow part) holds
-no points, and a finger may be planned into it. Stage one's hidden superquadrics model that body. Their surfaces,
-shrunk by ``body_margin_m`` (fit error) and sampled every ``body_spacing_m``, become obstacle
-points for the open fingers and the palm's approach path, like cloud points, except where a
-camera saw through them: a sample in front of the surface a camera measured along its ray (by
-more than ``body_carve_margin_m``) lies in free space the camera saw, so the superquadric
-overshoots the object there, and the sample is dropped (space carving on the cloud's depth).
+no points, and a finger may be planned into it. Stage one's hidden superquadrics model that
+body. Their surfaces, shrunk by ``body_margin_m`` (fit error) and sampled every
+``body_spacing_m``, become obstacle points for the open fingers and the palm's approach path,
+like cloud points, except where a camera saw through them: a sample in front of the surface a
+camera measured along its ray (by more than ``body_carve_margin_m``) lies in free space the
+camera saw, so the superquadric overshoots the object there, and the sample is dropped (space
+carving on the cloud's depth).
 
 The rule needs the cameras' positions: without them a fit that overshoots into free space
 cannot be told from a hidden body, and the planner skips the rule (``plan_from_hidden``).
