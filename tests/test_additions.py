@@ -11,7 +11,7 @@ import pytest
 
 from hsqbench.config import ConfigError, from_dict
 from hsqbench.planner.additions import ADDITIONS, AdditionsConfig, ablation_planners, all_off
-from hsqbench.planner.api import PlanningContext, plan_from_hidden
+from hsqbench.planner.api import HSQPlanner, PlanningContext, plan_from_hidden
 from hsqbench.planner.candidates import CandidateSet, ClosingLines
 from hsqbench.planner.cleaning import clean_cloud
 from hsqbench.planner.config import PlannerConfig, load_planner_config
@@ -32,6 +32,7 @@ from tests.shapes import (
     superquadric_cloud,
     union_cloud,
 )
+from tests.test_baselines import two_boxes_apart
 from tests.test_elimination import GRIPPER, ROLLS, one_line, patch, reasons, two_faces
 from tests.test_table_lines import lying_bar
 
@@ -76,6 +77,14 @@ def case_thinning(cfg: PlannerConfig):
 def case_outlier_removal(cfg: PlannerConfig):
     cloud = np.concatenate([two_faces(0.02), [[0.5, 0.5, 0.5]]])
     return clean_cloud(cloud, cfg.cleaning).n_removed
+
+
+def case_object_split(cfg: PlannerConfig):
+    # Two boxes placed apart in a packed scene: whole-object fits (seed 0).
+    _, _, points = two_boxes_apart()
+    context = PlanningContext(support_plane=TABLE, packed=True, seed=0)
+    hidden = HSQPlanner(cfg).plan(points, context).hidden_superquadrics
+    return sum(h.seed == 0 for h in hidden)
 
 
 def case_extra_parts(cfg: PlannerConfig):
@@ -175,6 +184,7 @@ def case_hidden_bodies(cfg: PlannerConfig):
 CASES = {
     "thinning": (case_thinning, lambda on, off: on < 0.25 and off == 1.0),
     "outlier_removal": (case_outlier_removal, lambda on, off: on == 1 and off == 0),
+    "object_split": (case_object_split, lambda on, off: on == 2 and off == 1),
     "extra_parts": (case_extra_parts, lambda on, off: on != off),
     "fit_dedup": (case_fit_dedup, lambda on, off: on < off),
     "multi_start": (case_multi_start, lambda on, off: on < off - 0.1),

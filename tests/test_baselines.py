@@ -17,10 +17,9 @@ from hsqbench.planner.baselines.antipodal import AntipodalPlanner, plan_antipoda
 from hsqbench.planner.baselines.config import (
     AntipodalConfig,
     BaselinesConfig,
-    SingleSQConfig,
     load_baselines_config,
 )
-from hsqbench.planner.baselines.single_sq import SingleSQPlanner, object_clusters, plan_single_sq
+from hsqbench.planner.baselines.single_sq import SingleSQPlanner, plan_single_sq
 from hsqbench.planner.candidates import CandidateSet
 from hsqbench.planner.cleaning import clean_cloud
 from hsqbench.planner.elimination import eliminate, unobservable_contacts
@@ -180,24 +179,6 @@ def two_boxes_apart() -> tuple[Box, Box, np.ndarray]:
     return a, b, np.concatenate([seen([a], seed=4), seen([b], seed=5), strays])
 
 
-def test_object_clusters_split_objects_placed_apart() -> None:
-    a, b, points = two_boxes_apart()
-    groups = object_clusters(points, SingleSQConfig())
-    assert len(groups) == 2
-    for group in groups:
-        on_a = a.contains(points[group], tol=0.005)
-        on_b = b.contains(points[group], tol=0.005)
-        assert on_a.all() or on_b.all()
-    # The three strays are too few for an object; so is a lone sample the views caught at a
-    # box's bottom edge, but (nearly) every box point is in a cluster.
-    clustered = np.zeros(len(points), dtype=bool)
-    clustered[np.concatenate(groups)] = True
-    assert not clustered[-3:].any() and clustered[:-3].mean() > 0.999
-    # Linked at 4 cm, the 3 cm gap no longer separates them.
-    wide = SingleSQConfig(cluster_distance_m=0.04)
-    assert len(object_clusters(points, wide)) == 1
-
-
 def test_single_sq_fits_one_superquadric_per_object_in_packed_scenes() -> None:
     a, b, points = two_boxes_apart()
     packed = plan_single_sq(points, packed=True, support_plane=TABLE, seed=0)
@@ -210,13 +191,6 @@ def test_single_sq_fits_one_superquadric_per_object_in_packed_scenes() -> None:
     whole = plan_single_sq(points, packed=False, support_plane=TABLE, seed=0)
     assert len(whole.hidden_superquadrics) == 1
     assert whole.hidden_superquadrics[0].superquadric.scale.max() > 0.05
-
-
-def test_cluster_settings_are_checked() -> None:
-    with pytest.raises(ConfigError, match="cluster_voxel_m"):
-        from_dict(BaselinesConfig, {"single_sq": {"cluster_voxel_m": 0.02}})
-    with pytest.raises(ConfigError, match="min_cluster_points"):
-        from_dict(BaselinesConfig, {"single_sq": {"min_cluster_points": 5}})
 
 
 # ----------------------------------------------------------------------------- antipodal

@@ -42,6 +42,11 @@ ADDITIONS: dict[str, Addition] = {
         {"min_neighbours": 0},
         "isolated points (flying pixels) are removed before both stages",
     ),
+    "object_split": Addition(
+        "recovery",
+        {"split_objects": False},
+        "stage one runs on each object of a packed scene (its cloud's clusters), not on the scene",
+    ),
     "extra_parts": Addition(
         "recovery",
         {"kmeans_parts_factor": 1.0},
@@ -138,6 +143,7 @@ class AdditionsConfig:
 
     thinning: bool = True
     outlier_removal: bool = True
+    object_split: bool = True
     extra_parts: bool = True
     fit_dedup: bool = True
     multi_start: bool = True

@@ -30,6 +30,7 @@ from hsqbench.planner.additions import AdditionsConfig
 from hsqbench.planner.base import CleanInput, PlannerBase, rules_removed_reason
 from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet
 from hsqbench.planner.cleaning import CleaningConfig
+from hsqbench.planner.clusters import object_clusters
 from hsqbench.planner.config import GraspConfig, PlannerConfig, load_planner_config
 from hsqbench.planner.elimination import eliminate
 from hsqbench.planner.grasp import Grasp
@@ -403,14 +404,27 @@ class HSQPlanner(PlannerBase):
         return self.config.cleaning
 
     def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
-        """Stage one (hidden superquadrics) on the cleaned cloud, then stage two."""
+        """Stage one (hidden superquadrics) on the cleaned cloud, or on each object of a packed
+        scene (``recovery.split_objects``), then stage two on the whole cloud."""
         from hsqbench.planner.recovery import recover_hidden_superquadrics
 
         start_recovery = time.perf_counter()
-        hidden = recover_hidden_superquadrics(clean.points, self.config.recovery, seed=context.seed)
+        rcfg = self.config.recovery
+        cloud = clean.points
+        # A packed scene is split into objects, each recovered as an isolated one; a cloud
+        # whose every cluster is too small is recovered whole.
+        groups = object_clusters(cloud, rcfg) if context.packed and rcfg.split_objects else []
+        if not groups:
+            groups = [np.arange(cloud.shape[0])]
+        # A loop over objects (at most a handful), each recovery vectorised over its points.
+        hidden = [
+            dataclasses.replace(h, inliers=group[h.inliers])
+            for group in groups
+            for h in recover_hidden_superquadrics(cloud[group], rcfg, seed=context.seed)
+        ]
         # Inliers index the caller's cloud, not the cleaned one.
         hidden = [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in hidden]
         t_recovery = time.perf_counter() - start_recovery
-        result = plan_in_context(clean.points, hidden, self.config.grasp, self.gripper, context)
+        result = plan_in_context(cloud, hidden, self.config.grasp, self.gripper, context)
         result.timings = {"recovery": t_recovery, **result.timings}
         return result

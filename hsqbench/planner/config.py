@@ -25,6 +25,11 @@ class RecoveryConfig:
     the ``recovery:`` section of ``configs/planner.yaml``.
     """
 
+    # Packed scenes: one stage one per object (hsqbench.planner.clusters).
+    split_objects: bool = True
+    cluster_distance_m: float = 0.01
+    cluster_voxel_m: float = 0.005
+    min_cluster_points: int = 50
     # Downsampling.
     voxel_size_m: float = 0.004
     max_fit_points: int = 1500
@@ -63,6 +68,8 @@ class RecoveryConfig:
 
     def __post_init__(self) -> None:
         positive = (
+            "cluster_distance_m",
+            "cluster_voxel_m",
             "voxel_size_m",
             "k_count_voxel_m",
             "kmeans_parts_factor",
@@ -89,6 +96,16 @@ class RecoveryConfig:
             )
         if not self.start_eps:
             raise ValueError("start_eps needs at least one (eps1, eps2) pair")
+        if self.cluster_voxel_m >= self.cluster_distance_m:
+            raise ValueError(
+                "cluster_voxel_m must be below cluster_distance_m (neighbouring voxels of one "
+                f"surface must link), got {self.cluster_voxel_m} >= {self.cluster_distance_m}"
+            )
+        if self.min_cluster_points < 11:
+            raise ValueError(
+                "min_cluster_points must be >= 11 (a superquadric has 11 parameters), "
+                f"got {self.min_cluster_points}"
+            )
 
 
 @dataclass(frozen=True)

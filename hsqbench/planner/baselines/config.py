@@ -80,39 +80,6 @@ class AntipodalConfig:
 
 
 @dataclass(frozen=True)
-class SingleSQConfig:
-    """The single-superquadric baseline (:mod:`hsqbench.planner.baselines.single_sq`).
-
-    Attributes:
-        cluster_distance_m: in packed scenes the cloud is split into objects: points closer
-            than this (through chains of points) belong to one object, m.
-        cluster_voxel_m: the split runs on voxel centroids of this size, m.
-        min_cluster_points: smaller clusters are left out (not an object), points.
-    """
-
-    cluster_distance_m: float = 0.01
-    cluster_voxel_m: float = 0.005
-    min_cluster_points: int = 50
-
-    def __post_init__(self) -> None:
-        for key in ("cluster_distance_m", "cluster_voxel_m"):
-            value = getattr(self, key)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"single_sq.{key} must be > 0, got {value}")
-        if self.cluster_voxel_m >= self.cluster_distance_m:
-            raise ValueError(
-                "single_sq.cluster_voxel_m must be below cluster_distance_m (neighbouring "
-                f"voxels of one surface must link), got {self.cluster_voxel_m} >= "
-                f"{self.cluster_distance_m}"
-            )
-        if self.min_cluster_points < 11:
-            raise ValueError(
-                "single_sq.min_cluster_points must be >= 11 (a superquadric has 11 parameters), "
-                f"got {self.min_cluster_points}"
-            )
-
-
-@dataclass(frozen=True)
 class BaselinesConfig:
     """Settings of the ``single-sq`` and ``antipodal`` planners.
 
@@ -120,12 +87,10 @@ class BaselinesConfig:
         planner: name or path of the planner config (``configs/planner.yaml``) whose stage-one
             (``single-sq``) and stage-two settings (both: gripper, elimination, ``q_delta``) the
             baselines share with the hsq planner.
-        single_sq: the single-superquadric baseline.
         antipodal: the antipodal sampler.
     """
 
     planner: str = "planner"
-    single_sq: SingleSQConfig = field(default_factory=SingleSQConfig)
     antipodal: AntipodalConfig = field(default_factory=AntipodalConfig)
 
 

@@ -15,8 +15,10 @@ shape (an L, a mug with a handle) the one superquadric envelops the parts, its a
 and its alpha is large, which is the failure the paper's hidden superquadrics address.
 
 In packed scenes the method needs one cloud per object, as the single-superquadric papers
-segment theirs: the cloud is split into Euclidean clusters (:func:`object_clusters`, objects
-are placed apart) and each cluster gets its own superquadric. Isolated clouds are one object.
+segment theirs: the cloud is split into Euclidean clusters
+(:func:`~hsqbench.planner.clusters.object_clusters` with the planner config's ``recovery:``
+settings, as hsq's stage one; objects are placed apart) and each cluster gets its own
+superquadric. Isolated clouds are one object.
 """
 
 from __future__ import annotations
@@ -27,39 +29,15 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from hsqbench.planner.api import PlanningContext, PlanResult, plan_in_context
 from hsqbench.planner.base import CleanInput
-from hsqbench.planner.baselines.config import (
-    BaselinesConfig,
-    SingleSQConfig,
-)
+from hsqbench.planner.baselines.config import BaselinesConfig
 from hsqbench.planner.baselines.planner import BaselinePlanner
+from hsqbench.planner.clusters import object_clusters
 from hsqbench.planner.config import RecoveryConfig
-from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.recovery import HiddenSuperquadric, fit_measures, fit_superquadric
-
-
-def object_clusters(cloud: NDArray[np.float64], config: SingleSQConfig) -> list[NDArray[np.int64]]:
-    """Indices into ``cloud`` (N, 3) of each object: connected components of the voxel
-    centroids (``cluster_voxel_m``) linked within ``cluster_distance_m``, largest first, those
-    with fewer than ``min_cluster_points`` points left out."""
-    down = voxel_downsample(cloud, config.cluster_voxel_m)
-    pairs = cKDTree(down.points).query_pairs(config.cluster_distance_m, output_type="ndarray")
-    m = down.points.shape[0]
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
-    _, voxel_label = connected_components(graph, directed=False)
-    label = voxel_label[down.inverse]
-    sizes = np.bincount(label)
-    keep = np.flatnonzero(sizes >= config.min_cluster_points)
-    order = keep[np.argsort(-sizes[keep], kind="stable")]
-    members = np.argsort(label, kind="stable")
-    starts = np.concatenate([[0], np.cumsum(sizes)])
-    return [members[starts[c] : starts[c + 1]] for c in order]
 
 
 def _one_superquadric(
@@ -94,7 +72,7 @@ def plan_single_sq(
         config: a :class:`BaselinesConfig`, a config name or a YAML path; None: baselines.yaml
             (whose ``planner`` entry names the stage-one and stage-two settings).
         packed: a packed scene: ``h_delta`` left out, and one superquadric per object
-            (:func:`object_clusters`).
+            (:func:`~hsqbench.planner.clusters.object_clusters`).
         support_plane: the table ``(a, b, c, d)``, unit normal toward the free side.
         seed: passed to stage two (the fit itself is deterministic).
         gripper: default: the gripper of the planner config's ``grasp:`` section.
@@ -122,12 +100,12 @@ class SingleSQPlanner(BaselinePlanner):
 
     def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
         """One superquadric per object (the whole cloud when not packed), then stage two."""
-        bcfg, pcfg = self.config, self.planner_config
+        pcfg = self.planner_config
         cloud = clean.points
         rcfg = pcfg.recovery
         start_recovery = time.perf_counter()
         whole = [np.arange(cloud.shape[0])]
-        groups = object_clusters(cloud, bcfg.single_sq) if context.packed else whole
+        groups = object_clusters(cloud, rcfg) if context.packed else whole
         # A loop over objects (at most a handful), each fit vectorised over its points.
         fits = [_one_superquadric(cloud, g, i, rcfg) for i, g in enumerate(groups)]
         # Inliers index the caller's cloud, not the cleaned one (as hsq's).
@@ -139,7 +117,7 @@ class SingleSQPlanner(BaselinePlanner):
                 timings={},
                 reason=(
                     f"no object: every cluster of the cleaned cloud has fewer than "
-                    f"{bcfg.single_sq.min_cluster_points} points (single_sq.min_cluster_points)"
+                    f"{rcfg.min_cluster_points} points (recovery.min_cluster_points)"
                 ),
             )
         else:
