@@ -344,6 +344,34 @@ def test_post_grasp_motions_are_checked(config, monkeypatch):
     assert attempt.target == "proc_box" and attempt.rank_executed >= 0
 
 
+def test_an_object_lost_while_lowered_into_the_bin_is_released_there(config, monkeypatch):
+    """A slip or a lost finger during the lowering, over the bin, ends the lowering: the hand
+    opens where it is and where the object comes to rest decides; the detail says so."""
+    from hsqbench.sim.trial import execution
+
+    lowering = {"started": False}
+    real_lowering = execution._lowering
+
+    def marked(env, drop):
+        out = real_lowering(env, drop)
+        lowering["started"] = True
+        return out
+
+    class SlipsWhenLowered(execution.HoldWatch):
+        def __call__(self):
+            if lowering["started"]:
+                return "proc_box slipped 5.0 cm in the hand"
+            return super().__call__()
+
+    monkeypatch.setattr(execution, "_lowering", marked)
+    monkeypatch.setattr(execution, "HoldWatch", SlipsWhenLowered)
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert lowering["started"]
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    assert attempt.detail.startswith("in the bin")
+    assert "(lost while lowering: proc_box slipped 5.0 cm in the hand)" in attempt.detail
+
+
 def test_lowering_fractions_start_at_the_full_lowering_and_decrease():
     from hsqbench.sim.trial.config import ExecutionConfig
 

@@ -22,7 +22,8 @@ One attempt (:func:`run_attempt`):
    the object really is in the hand and checked as the approach was (no robot part too near the
    table or bin along them): a carry that fails the check ends the attempt as ``unreachable``
    with the object held (never a silent fallback to the planned pose); a lowering that fails
-   it is not run, the hand opens over the bin from higher up, and the detail says so. The phases are
+   it is made shorter or not run, the hand opens over the bin from higher up, and the detail
+   says so; an object lost during the lowering is released where it is. The phases are
    :data:`~hsqbench.sim.trial.execution.PHASES`. Judged on the way (:mod:`hsqbench.sim.judge`):
 
    - ``collision_on_approach``: before the fingers close, the robot presses the table or bin
@@ -32,9 +33,10 @@ One attempt (:func:`run_attempt`):
      touches both fingers; or the object is lost during the lift before it rose
      ``lifted_height_m``.
    - ``dropped``: the object was lifted, then left a finger for ``lost_time_s`` or slipped
-     ``slip_distance_m`` in the hand (at the point held between the pads) before the release;
-     or it was released but did not come to rest inside the bin.
-   - ``success``: held from the lift to the release, and at rest inside the bin afterwards (the
+     ``slip_distance_m`` in the hand (at the point held between the pads) before the lowering
+     into the bin; or it was released (or lost while lowered) but did not come to rest inside
+     the bin.
+   - ``success``: held from the lift to the bin, and at rest inside the bin afterwards (the
      paper: "grasps the object and moves it from the workspace to a bin next to the arm without
      dropping it").
    - ``sim_unstable``: NaN or exploding state at any point (never a success).

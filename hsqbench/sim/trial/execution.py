@@ -161,7 +161,8 @@ def _release(x: _Execution) -> Verdict:
     """Lower the object toward the bin floor on a checked vertical line, open, and judge where
     the object came to rest. A lowering that cannot be solved or would sweep the arm into the
     bin is tried shorter (``execution.lowering_fractions``); when none can be run the hand opens
-    where it is, over the bin. A higher release is not a failure; the detail says so."""
+    where it is, over the bin. An object that slips or leaves a finger during the lowering is
+    released there. A higher release is not a failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
     note = ""
@@ -172,9 +173,10 @@ def _release(x: _Execution) -> Verdict:
             note = f" (released {(drop - depth) * 100:.0f} cm higher: lowering {problem})"
         if waypoints is not None:
             traj = _line_trajectory(env, waypoints, depth, "lift")
-            reason = env.stepper.follow(traj, (x.hold,))
-            if reason:
-                return Outcome.DROPPED, x.target, f"lowering into the bin: {reason}"
+            # Lost here, the object is already over the bin, lower than the carry: the hand
+            # stops and opens as for a release, and where the object comes to rest decides.
+            if reason := env.stepper.follow(traj, (x.hold,)):
+                note += f" (lost while lowering: {reason})"
     env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
     env.stepper.hold(cfg.motion.fall_time_s)
     if probe.in_bin(d, x.target):
