@@ -48,7 +48,7 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
 5. ``sweep`` (addition, ``sweep_rule``): the paper only looks between the end planes. Any cloud
    point in the volume the hand sweeps also removes the pose: the open fingers, and the palm
    swept back by ``approach_distance_m`` (the straight-line approach from the pre-grasp pose).
-   E.g. the body of a mug beside a finger that grips its handle.
+   E.g. a body no camera sees, beside a finger that grips a thin part in front of it.
 6. ``hidden`` (addition, ``body_rule``): the same test against obstacle points that model what
    no camera saw: the surfaces of the hidden superquadrics, shrunk by ``body_margin_m``, less
    the samples a camera saw through (:mod:`~hsqbench.planner.hidden_bodies`). E.g. a body
