@@ -372,6 +372,37 @@ def test_an_object_lost_while_lowered_into_the_bin_is_released_there(config, mon
     assert "(lost while lowering: proc_box slipped 5.0 cm in the hand)" in attempt.detail
 
 
+def test_an_object_still_in_the_open_hand_is_withdrawn_from_along_the_approach(config, monkeypatch):
+    """An object not in the bin once the hand has opened (hooked on a finger) makes the hand
+    pull back ``withdraw_m`` along its approach axis before the object is judged; one released
+    into the bin is judged as it lies, the hand not moved."""
+    from hsqbench.sim.trial import execution
+
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.SUCCESS and "withdrawn" not in attempt.detail
+    moves = []
+    real_withdraw = execution._withdraw
+
+    def recorded(x):
+        before = x.env.panda.tcp_pose(x.env.data)
+        note = real_withdraw(x)
+        moves.append((before, x.env.panda.tcp_pose(x.env.data)[0]))
+        return note
+
+    # The hand does not open: the box stays between the pads, over the bin.
+    monkeypatch.setattr(
+        Stepper, "open_hand", lambda self, width: self.panda.gripper_width(self.data)
+    )
+    monkeypatch.setattr(execution, "_withdraw", recorded)
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.DROPPED, attempt.detail
+    assert attempt.detail.endswith("(withdrawn 8 cm to free it from the fingers)")
+    [((p0, r0), p1)] = moves
+    moved = p1 - p0
+    assert np.linalg.norm(moved) == pytest.approx(config.execution.withdraw_m, abs=0.01)
+    assert moved @ -r0[:, 2] > 0.95 * np.linalg.norm(moved)
+
+
 def test_lowering_fractions_start_at_the_full_lowering_and_decrease():
     from hsqbench.sim.trial.config import ExecutionConfig
 

@@ -52,6 +52,8 @@ class ExecutionConfig:
         min_lowering_m: a lowering shorter than this is not run (already at release height).
         lowering_fractions: the lowering's depths tried in turn, as fractions of the full one,
             when the full one cannot be solved or would sweep the arm into the bin.
+        withdraw_m: how far the open hand is pulled back along its approach when the object
+            is not in the bin after the release (tried shorter like the lowering).
         resolve_restarts: IK restarts when a pose is re-solved during execution (the carry
             for the object's real position, the retreat): seeded by the plan, one suffices.
         park_xy_m: where removed objects are parked (x, y; object k at x + k), far outside
@@ -76,13 +78,14 @@ class ExecutionConfig:
     nudge_extra_m: float = 0.0005
     min_lowering_m: float = 0.01
     lowering_fractions: tuple[float, ...] = (1.0, 0.75, 0.5, 0.25)
+    withdraw_m: float = 0.08
     resolve_restarts: int = 1
     park_xy_m: tuple[float, float] = (10.0, 10.0)
 
     def __post_init__(self) -> None:
         if self.approach_segments < 1 or self.lift_segments < 1:
             raise ValueError("execution: approach_segments and lift_segments must be >= 1")
-        for name in ("pregrasp_distance_m", "lift_height_m", "carry_clearance_m"):
+        for name in ("pregrasp_distance_m", "lift_height_m", "carry_clearance_m", "withdraw_m"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"execution.{name} must be positive, got {getattr(self, name)}")
         fr = self.lowering_fractions

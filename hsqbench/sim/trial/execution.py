@@ -132,29 +132,51 @@ def _carry(x: _Execution) -> Verdict:
     return None
 
 
-def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, float, str]:
-    """The deepest lowering of the TCP by ``drop`` x ``execution.lowering_fractions`` whose line
-    can be solved and is clear of table and bin: ``(waypoints, depth, problem)``, where
-    ``problem`` is the full lowering's (empty when it can be made) and ``waypoints`` is None
-    when none can."""
+def _deepest_line(
+    env: TrialEnv, direction: NDArray[np.float64], length_m: float
+) -> tuple[NDArray[np.float64] | None, float, str]:
+    """The longest straight TCP line from where the hand is along ``direction``, of
+    ``length_m`` x ``execution.lowering_fractions``, that can be solved and is clear of table and
+    bin: ``(waypoints, length, problem)``, where ``problem`` is the full line's (empty when it
+    can be made) and ``waypoints`` is None when none can."""
     d, panda = env.data, env.panda
     env.ik.sync(d)
     here = Pose(*panda.tcp_pose(d))
     first_problem = ""
     for fraction in env.config.execution.lowering_fractions:
-        depth = fraction * drop
+        length = fraction * length_m
         path = env.ik.solve_line(
             here,
-            here.position - np.array([0.0, 0.0, depth]),
+            here.position + length * direction,
             env.config.execution.lift_segments,
             panda.arm_q(d),
         )
         waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
         problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
         if not problem:
-            return waypoints, depth, first_problem
+            return waypoints, length, first_problem
         first_problem = first_problem or problem
     return None, 0.0, first_problem
+
+
+def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, float, str]:
+    """The deepest vertical lowering of the TCP by at most ``drop`` (:func:`_deepest_line`)."""
+    return _deepest_line(env, np.array([0.0, 0.0, -1.0]), drop)
+
+
+def _withdraw(x: _Execution) -> str:
+    """Pull the open hand back along its approach axis, as a place motion ends: an object still
+    hooked on a finger (a cup's wall between the open pads after a release from higher up)
+    slides off it; one that already fell is not touched. Returns the detail's note."""
+    env = x.env
+    approach = env.panda.tcp_pose(env.data)[1][:, 2]
+    length = env.config.execution.withdraw_m
+    waypoints, made, problem = _deepest_line(env, -approach, length)
+    if waypoints is None:
+        return f" (not withdrawn: {problem})"
+    env.stepper.follow(_line_trajectory(env, waypoints, made, "lift"), ())
+    env.stepper.hold(env.config.motion.fall_time_s)
+    return f" (withdrawn {made * 100:.0f} cm to free it from the fingers)"
 
 
 def _release(x: _Execution) -> Verdict:
@@ -162,7 +184,9 @@ def _release(x: _Execution) -> Verdict:
     the object came to rest. A lowering that cannot be solved or would sweep the arm into the
     bin is tried shorter (``execution.lowering_fractions``); when none can be run the hand opens
     where it is, over the bin. An object that slips or leaves a finger during the lowering is
-    released there. A higher release is not a failure; the detail says so."""
+    released there. An object not in the bin once the hand is open may still hang on a finger:
+    the hand is withdrawn along its approach (:func:`_withdraw`) before it is judged. A higher release is not a
+    failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
     note = ""
@@ -179,6 +203,8 @@ def _release(x: _Execution) -> Verdict:
                 note += f" (lost while lowering: {reason})"
     env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
     env.stepper.hold(cfg.motion.fall_time_s)
+    if not probe.in_bin(d, x.target):
+        note += _withdraw(x)
     if probe.in_bin(d, x.target):
         return Outcome.SUCCESS, x.target, "in the bin" + note
     where = probe.position(d, x.target).round(3).tolist()
