@@ -238,6 +238,7 @@ def test_result_is_reproducible_and_serialisable() -> None:
         "collision",
         "sweep",
         "hidden",
+        "release",
     ]
 
 

@@ -26,7 +26,16 @@ from hsqbench.planner.grasp import Grasp
 
 #: Elimination reasons, in the order the rules run; ``KEPT`` marks a surviving candidate.
 KEPT = ""
-REJECTION_REASONS = ("duplicate", "width", "support", "table", "collision", "sweep", "hidden")
+REJECTION_REASONS = (
+    "duplicate",
+    "width",
+    "support",
+    "table",
+    "collision",
+    "sweep",
+    "hidden",
+    "release",
+)
 
 
 @dataclass
