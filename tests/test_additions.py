@@ -180,12 +180,6 @@ def case_hidden_bodies(cfg: PlannerConfig):
     return line_reasons(cfg, 0.02, two_faces(0.02), body_points=body)
 
 
-def case_release(cfg: PlannerConfig):
-    # A rim 5 cm above the line and 5 cm out on both sides, over the fingers opened to 8 cm.
-    rims = [patch((x, 0.0, 0.05), (0, 0, 1), radius=0.006) for x in (0.05, -0.05)]
-    return line_reasons(cfg, 0.02, np.concatenate([two_faces(0.02), *rims]))
-
-
 #: name -> (case, check(with, without)).
 CASES = {
     "thinning": (case_thinning, lambda on, off: on < 0.25 and off == 1.0),
@@ -208,7 +202,6 @@ CASES = {
     "unseen_waiver": (case_unseen_waiver, lambda on, off: on == {""} and off == {"support"}),
     "sweep": (case_sweep, lambda on, off: on == {"sweep"} and off == {""}),
     "hidden_bodies": (case_hidden_bodies, lambda on, off: on == {"hidden"} and off == {""}),
-    "release": (case_release, lambda on, off: "release" in on and "release" not in off),
 }
 
 

@@ -238,7 +238,6 @@ def test_result_is_reproducible_and_serialisable() -> None:
         "collision",
         "sweep",
         "hidden",
-        "release",
     ]
 
 

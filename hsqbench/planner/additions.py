@@ -134,11 +134,6 @@ ADDITIONS: dict[str, Addition] = {
         {"body_rule": False},
         "the hand must not enter the hidden superquadrics where no camera saw free space",
     ),
-    "release": Addition(
-        "grasp",
-        {"release_rule": False},
-        "no pose at which the object has parts above both open fingers (it would hang on them)",
-    ),
 }
 
 
@@ -166,7 +161,6 @@ class AdditionsConfig:
     unseen_waiver: bool = True
     sweep: bool = True
     hidden_bodies: bool = True
-    release: bool = True
 
     def __post_init__(self) -> None:
         for name in self.names():

@@ -26,16 +26,7 @@ from hsqbench.planner.grasp import Grasp
 
 #: Elimination reasons, in the order the rules run; ``KEPT`` marks a surviving candidate.
 KEPT = ""
-REJECTION_REASONS = (
-    "duplicate",
-    "width",
-    "support",
-    "table",
-    "collision",
-    "sweep",
-    "hidden",
-    "release",
-)
+REJECTION_REASONS = ("duplicate", "width", "support", "table", "collision", "sweep", "hidden")
 
 
 @dataclass

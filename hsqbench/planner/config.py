@@ -154,11 +154,6 @@ class GraspConfig:
     body_spacing_m: float = 0.005
     body_pixel_m: float = 0.004
     body_carve_margin_m: float = 0.004
-    # Rule 7, the release (release_rule: set by additions.release).
-    release_rule: bool = True
-    release_voxel_m: float = 0.005
-    release_fall_m: float = 0.12
-    release_min_points: int = 2
     # Scoring.
     q_alpha: float = 0.002
     q_gamma: float = 0.5

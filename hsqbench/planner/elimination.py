@@ -55,9 +55,6 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
    behind a handle that hides it from the cameras, where the cloud holds no point. Only
    planners with superquadrics pass such points (``body_points``); for the others the rule
    removes nothing.
-7. ``release`` (addition, ``release_rule``): the hand lets go by opening; an object with parts
-   above both open fingers would rest on them instead of falling into the bin (a tapered cup
-   gripped below a rim wider than the opening). :mod:`~hsqbench.planner.release`.
 
 Rules 4 to 6 are exact for the box model of the gripper and cost O(lines x points), not
 O(candidates x points): in the frame of a line (``s`` along it, polar ``r, theta`` about it) a
@@ -89,7 +86,6 @@ from hsqbench.planner.candidates import (
 from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.release import hangs_on_both_fingers
 from hsqbench.planner.roll_collisions import body_hits
 from hsqbench.planner.support import (
     SupportStats,
@@ -125,7 +121,6 @@ RULE_DESCRIPTIONS = {
     "sweep": "a cloud point in the open fingers or in the palm's approach path",
     "hidden": "the open fingers or the palm's approach path enter a hidden superquadric where "
     "no camera saw free space",
-    "release": "the object has parts above both open fingers: it would hang on them, not fall",
 }
 
 
@@ -343,13 +338,6 @@ def eliminate(
         apply("hidden", lines, body_hits(obstacles, cands, lines, swept, max_points=tolerated))
     else:
         remaining["hidden"] = remaining["sweep"]
-
-    lines = alive_lines()
-    if config.release_rule and lines.size:
-        up = None if support_plane is None else np.asarray(support_plane, float)[:3]
-        apply("release", lines, hangs_on_both_fingers(points, cands, lines, gripper, config, up))
-    else:
-        remaining["release"] = remaining["hidden"]
 
     names = np.array((KEPT, *REJECTION_REASONS), dtype=cands.rejected_by.dtype)
     cands.rejected_by = names[code.ravel()]

@@ -27,7 +27,6 @@ REASON_COLORS: dict[str, tuple[int, int, int, int]] = {
     "collision": (220, 30, 30, 255),  # red: the hand would hit the cloud
     "sweep": (170, 60, 200, 255),  # purple: the approach would sweep through the cloud
     "hidden": (230, 60, 160, 255),  # magenta: the hand would enter a body the cameras cannot see
-    "release": (40, 170, 170, 255),  # teal: the object would hang on the open fingers
 }
 #: A rejection reason without its own colour (a rule added after this table).
 OTHER_REASON_COLOR = (60, 60, 60, 255)
