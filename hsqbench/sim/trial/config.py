@@ -52,6 +52,10 @@ class ExecutionConfig:
         min_lowering_m: a lowering shorter than this is not run (already at release height).
         lowering_fractions: the lowering's depths tried in turn, as fractions of the full one,
             when the full one cannot be solved or would sweep the arm into the bin.
+        lowering_shifts_m: at each depth, the lowering is also tried ending this far off the
+            bin centre toward where the hand points (horizontally), when it is tilted more than
+            ``shift_min_level`` (the horizontal part of its approach axis).
+        shift_min_level: below this horizontal part the hand points down and is not shifted.
         withdraw_m: how far the open hand is pulled back along its approach when the object
             is not in the bin after the release (tried shorter like the lowering).
         resolve_restarts: IK restarts when a pose is re-solved during execution (the carry
@@ -78,6 +82,8 @@ class ExecutionConfig:
     nudge_extra_m: float = 0.0005
     min_lowering_m: float = 0.01
     lowering_fractions: tuple[float, ...] = (1.0, 0.75, 0.5, 0.25)
+    lowering_shifts_m: tuple[float, ...] = (0.03, 0.06)
+    shift_min_level: float = 0.5
     withdraw_m: float = 0.08
     resolve_restarts: int = 1
     park_xy_m: tuple[float, float] = (10.0, 10.0)
@@ -88,6 +94,16 @@ class ExecutionConfig:
         for name in ("pregrasp_distance_m", "lift_height_m", "carry_clearance_m", "withdraw_m"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"execution.{name} must be positive, got {getattr(self, name)}")
+        sh = self.lowering_shifts_m
+        if any(not a < b for a, b in pairwise((0.0, *sh))):
+            raise ValueError(
+                f"execution.lowering_shifts_m {list(sh)}: positive and increasing, or empty (no "
+                "shifted lowering)"
+            )
+        if not 0.0 <= self.shift_min_level <= 1.0:
+            raise ValueError(
+                f"execution.shift_min_level must be in [0, 1], got {self.shift_min_level}"
+            )
         fr = self.lowering_fractions
         if not fr or fr[0] != 1.0 or any(not 0 < b < a for a, b in pairwise(fr)):
             raise ValueError(

@@ -132,71 +132,84 @@ def _carry(x: _Execution) -> Verdict:
     return None
 
 
-def _deepest_line(
-    env: TrialEnv, direction: NDArray[np.float64], length_m: float
-) -> tuple[NDArray[np.float64] | None, float, str]:
-    """The longest straight TCP line from where the hand is along ``direction``, of
-    ``length_m`` x ``execution.lowering_fractions``, that can be solved and is clear of table and
-    bin: ``(waypoints, length, problem)``, where ``problem`` is the full line's (empty when it
-    can be made) and ``waypoints`` is None when none can."""
+def _first_clear_line(
+    env: TrialEnv, offsets: list[NDArray[np.float64]]
+) -> tuple[NDArray[np.float64] | None, int, str]:
+    """The first of the straight TCP lines from where the hand is, by ``offsets`` in turn, that
+    can be solved and is clear of table and bin: ``(waypoints, index, problem)``, where
+    ``problem`` is the first line's (empty when it can be made) and ``waypoints`` is None when
+    none can."""
     d, panda = env.data, env.panda
     env.ik.sync(d)
     here = Pose(*panda.tcp_pose(d))
     first_problem = ""
-    for fraction in env.config.execution.lowering_fractions:
-        length = fraction * length_m
+    for k, offset in enumerate(offsets):
         path = env.ik.solve_line(
-            here,
-            here.position + length * direction,
-            env.config.execution.lift_segments,
-            panda.arm_q(d),
+            here, here.position + offset, env.config.execution.lift_segments, panda.arm_q(d)
         )
         waypoints = np.vstack([panda.arm_q(d), path.q[1:]]) if path.ok else None
         problem = path.reason if waypoints is None else sweep_problem(env, *waypoints)
         if not problem:
-            return waypoints, length, first_problem
+            return waypoints, k, first_problem
         first_problem = first_problem or problem
-    return None, 0.0, first_problem
+    return None, -1, first_problem
 
 
-def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, float, str]:
-    """The deepest vertical lowering of the TCP by at most ``drop`` (:func:`_deepest_line`)."""
-    return _deepest_line(env, np.array([0.0, 0.0, -1.0]), drop)
+def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, float, float, str]:
+    """The deepest lowering of the TCP by ``drop`` x ``execution.lowering_fractions`` that can be
+    made, at each depth first straight down, then moved by ``execution.lowering_shifts_m``
+    toward where the hand points (horizontally): a wrist turned sideways is then drawn away from
+    the bin wall behind it. ``(waypoints, depth, shift, problem)`` as :func:`_first_clear_line`."""
+    ex = env.config.execution
+    approach = env.panda.tcp_pose(env.data)[1][:, 2]
+    level = np.array([approach[0], approach[1], 0.0])
+    norm = float(np.linalg.norm(level))
+    shifts = (0.0, *ex.lowering_shifts_m) if norm > ex.shift_min_level else (0.0,)
+    plan = [(f * drop, s) for f in ex.lowering_fractions for s in shifts]
+    down = np.array([0.0, 0.0, -1.0])
+    offsets = [depth * down + shift * level / max(norm, 1e-9) for depth, shift in plan]
+    waypoints, k, problem = _first_clear_line(env, offsets)
+    depth, shift = plan[k] if waypoints is not None else (0.0, 0.0)
+    return waypoints, depth, shift, problem
 
 
 def _withdraw(x: _Execution) -> str:
     """Pull the open hand back along its approach axis, as a place motion ends: an object still
     hooked on a finger (a cup's wall between the open pads after a release from higher up)
-    slides off it; one that already fell is not touched. Returns the detail's note."""
+    slides off it; one that already fell is not touched. Tried shorter as the lowering is.
+    Returns the detail's note."""
     env = x.env
-    approach = env.panda.tcp_pose(env.data)[1][:, 2]
-    length = env.config.execution.withdraw_m
-    waypoints, made, problem = _deepest_line(env, -approach, length)
+    back = -env.panda.tcp_pose(env.data)[1][:, 2] * env.config.execution.withdraw_m
+    fractions = env.config.execution.lowering_fractions
+    waypoints, k, problem = _first_clear_line(env, [f * back for f in fractions])
     if waypoints is None:
         return f" (not withdrawn: {problem})"
+    made = fractions[k] * env.config.execution.withdraw_m
     env.stepper.follow(_line_trajectory(env, waypoints, made, "lift"), ())
     env.stepper.hold(env.config.motion.fall_time_s)
     return f" (withdrawn {made * 100:.0f} cm to free it from the fingers)"
 
 
 def _release(x: _Execution) -> Verdict:
-    """Lower the object toward the bin floor on a checked vertical line, open, and judge where
-    the object came to rest. A lowering that cannot be solved or would sweep the arm into the
-    bin is tried shorter (``execution.lowering_fractions``); when none can be run the hand opens
+    """Lower the object toward the bin floor on a checked line, open, and judge where it came to
+    rest. A lowering that cannot be solved or would sweep the arm into the bin is tried moved
+    away from the wrist, then shorter (:func:`_lowering`); when none can be run the hand opens
     where it is, over the bin. An object that slips or leaves a finger during the lowering is
     released there. An object not in the bin once the hand is open may still hang on a finger:
-    the hand is withdrawn along its approach (:func:`_withdraw`) before it is judged. A higher release is not a
-    failure; the detail says so."""
+    the hand is withdrawn along its approach (:func:`_withdraw`) before it is judged. A higher
+    release is not a failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
     note = ""
     drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
     if drop > cfg.execution.min_lowering_m:
-        waypoints, depth, problem = _lowering(env, drop)
+        waypoints, depth, shift, problem = _lowering(env, drop)
         if problem:
             note = f" (released {(drop - depth) * 100:.0f} cm higher: lowering {problem})"
+        if shift:
+            note += f" (lowered {shift * 100:.0f} cm off the bin centre, away from the wrist)"
         if waypoints is not None:
-            traj = _line_trajectory(env, waypoints, depth, "lift")
+            traj = _line_trajectory(env, waypoints, float(np.hypot(depth, shift)), "lift")
             # Lost here, the object is already over the bin, lower than the carry: the hand
             # stops and opens as for a release, and where the object comes to rest decides.
             if reason := env.stepper.follow(traj, (x.hold,)):
