@@ -403,6 +403,38 @@ def test_an_object_still_in_the_open_hand_is_withdrawn_from_along_the_approach(c
     assert moved @ -r0[:, 2] > 0.95 * np.linalg.norm(moved)
 
 
+def test_a_blocked_lowering_is_tried_away_from_a_sideways_wrist_before_a_shorter_one(
+    config, monkeypatch
+):
+    """At each depth of ``lowering_fractions`` the lowering is tried straight down, then moved
+    by each of ``lowering_shifts_m`` toward where the hand points, horizontally; a hand that
+    points down is never moved."""
+    from types import SimpleNamespace
+
+    from hsqbench.sim.trial import execution
+
+    tried = []
+
+    def first_clear(env, offsets):
+        tried[:] = offsets
+        return np.zeros((2, 7)), len(offsets) - 2, "link7 1.0 mm from the table or bin"
+
+    monkeypatch.setattr(execution, "_first_clear_line", first_clear)
+    ex = config.execution
+    sideways = np.column_stack([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # points +x
+    for rotation, shifts in ((sideways, (0.0, *ex.lowering_shifts_m)), (TOP_DOWN, (0.0,))):
+        panda = SimpleNamespace(tcp_pose=lambda data, r=rotation: (np.zeros(3), r))
+        env = SimpleNamespace(config=config, panda=panda, data=None)
+        _, depth, shift, problem = execution._lowering(env, 0.2)
+        expected = [[s, 0.0, -f * 0.2] for f in ex.lowering_fractions for s in shifts]
+        np.testing.assert_allclose(np.array(tried), expected, atol=1e-12)
+        assert (depth, shift) == pytest.approx((-expected[-2][2], expected[-2][0]))
+        assert problem == "link7 1.0 mm from the table or bin"
+    for bad in [(0.06, 0.03), (0.0,), (-0.01,)]:
+        with pytest.raises(ValueError, match="lowering_shifts_m"):
+            replace(ex, lowering_shifts_m=bad)
+
+
 def test_lowering_fractions_start_at_the_full_lowering_and_decrease():
     from hsqbench.sim.trial.config import ExecutionConfig
 

@@ -204,10 +204,11 @@ def _release(x: _Execution) -> Verdict:
     drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
     if drop > cfg.execution.min_lowering_m:
         waypoints, depth, shift, problem = _lowering(env, drop)
-        if problem:
+        if problem and depth < drop:
             note = f" (released {(drop - depth) * 100:.0f} cm higher: lowering {problem})"
         if shift:
-            note += f" (lowered {shift * 100:.0f} cm off the bin centre, away from the wrist)"
+            why = "" if depth < drop else f": straight down, {problem}"
+            note += f" (lowered {shift * 100:.0f} cm off the bin centre, away from the wrist{why})"
         if waypoints is not None:
             traj = _line_trajectory(env, waypoints, float(np.hypot(depth, shift)), "lift")
             # Lost here, the object is already over the bin, lower than the carry: the hand
