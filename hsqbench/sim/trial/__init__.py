@@ -22,8 +22,10 @@ One attempt (:func:`run_attempt`):
    the object really is in the hand and checked as the approach was (no robot part too near the
    table or bin along them): a carry that fails the check ends the attempt as ``unreachable``
    with the object held (never a silent fallback to the planned pose); a lowering that fails
-   it is made shorter or not run, the hand opens over the bin from higher up, and the detail
-   says so; an object lost during the lowering is released where it is. The phases are
+   it is moved away from a sideways wrist, made shorter or not run, the hand opens over the bin
+   from higher up, and the detail says so; an object lost during the lowering is released where
+   it is; an object not in the bin once the hand is open (hanging on a finger) is freed by
+   withdrawing the hand along its approach before it is judged. The phases are
    :data:`~hsqbench.sim.trial.execution.PHASES`. Judged on the way (:mod:`hsqbench.sim.judge`):
 
    - ``collision_on_approach``: before the fingers close, the robot presses the table or bin
