@@ -307,8 +307,8 @@ def test_packed_round_with_hsq_follows_the_rules_and_is_deterministic(config):
 
 def test_post_grasp_motions_are_checked(config, monkeypatch):
     """After the lift, the carry and the lowering are re-solved for where the object really is
-    and checked like the approach (sweep against table and bin). A carry that fails the check
-    is ``unreachable`` with the object held, never a silent fallback to the plan; a lowering
+    and checked like the approach (sweep against table and bin). A carry that fails the check,
+    and whose planned pose fails it too, is ``unreachable`` with the object held; a lowering
     that fails it is tried shorter, else not run: the hand opens over the bin, higher up, and
     the detail says so."""
     from hsqbench.sim.trial import execution
@@ -342,6 +342,31 @@ def test_post_grasp_motions_are_checked(config, monkeypatch):
     assert attempt.outcome == Outcome.UNREACHABLE, attempt.detail
     assert attempt.detail == f"carry over the bin: {problem}"
     assert attempt.target == "proc_box" and attempt.rank_executed >= 0
+
+
+def test_a_carry_that_cannot_be_re_solved_runs_the_planned_one_and_says_so(config, monkeypatch):
+    """The carry re-solved for the object's position in the hand cannot be solved (here: a
+    target out of reach): the planned carry, checked when the grasp was planned, is run after
+    the same sweep check from where the arm is, and the detail names why."""
+    from hsqbench.sim.trial import execution
+
+    real_carry_pose = execution.carry_pose
+
+    def out_of_reach(bin_xy, lifted, held_xy):
+        pose, yaw = real_carry_pose(bin_xy, lifted, held_xy)
+        return execution.Pose(pose.position + np.array([3.0, 0.0, 0.0]), pose.rotation), yaw
+
+    monkeypatch.setattr(execution, "carry_pose", out_of_reach)
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    assert attempt.detail.startswith("in the bin (carried as planned: re-solved carry ")
+    assert "unreachable" in attempt.detail
+    # The planned carry is checked too: failing that check, the carry is unreachable.
+    problem = "link7 would come 1.0 mm from the table or bin at 50% of it"
+    monkeypatch.setattr(execution, "sweep_problem", lambda env, *w: problem if len(w) == 2 else "")
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.UNREACHABLE, attempt.detail
+    assert attempt.detail.startswith("carry over the bin: ") and "unreachable" in attempt.detail
 
 
 def test_an_object_lost_while_lowered_into_the_bin_is_released_there(config, monkeypatch):

@@ -20,8 +20,10 @@ One attempt (:func:`run_attempt`):
    vertical descent; straight approach; close with the 70 N hand; lift; carry (mostly a turn of
    the base joint) above the bin; lower; open. The carry and the lowering are re-solved for where
    the object really is in the hand and checked as the approach was (no robot part too near the
-   table or bin along them): a carry that fails the check ends the attempt as ``unreachable``
-   with the object held (never a silent fallback to the planned pose); a lowering that fails
+   table or bin along them): a carry that fails the check is replaced by the planned one (the
+   grasp point, not the object's centre, over the bin) when that passes the check from where
+   the arm is, and the detail says so, else it ends the attempt as ``unreachable`` with the
+   object held; a lowering that fails
    it is moved away from a sideways wrist, made shorter or not run, the hand opens over the bin
    from higher up, and the detail says so; an object lost during the lowering is released where
    it is; an object not in the bin once the hand is open (hanging on a finger) is freed by

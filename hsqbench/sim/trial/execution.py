@@ -41,6 +41,7 @@ class _Execution:
     target: str = ""
     hold: HoldWatch | None = None
     held_width_m: float = 0.0
+    note: str = ""  # what the detail adds about how the object was carried
 
 
 #: A phase's verdict: (outcome, target, detail), or None to go on.
@@ -114,21 +115,26 @@ def _lift(x: _Execution) -> Verdict:
 
 def _carry(x: _Execution) -> Verdict:
     """Centre the held object over the bin (its actual position in the hand): the carry pose
-    re-solved for it and checked like every planned motion (:func:`sweep_problem`); a carry
-    that cannot be solved or would sweep the arm into the table or bin is ``unreachable``."""
+    re-solved for it and checked like every planned motion (:func:`sweep_problem`). When that
+    cannot be solved or would sweep the arm into the table or bin, the planned carry (which puts
+    the grasp point over the bin centre: the object a few cm off it, still over the floor) is
+    run if it passes the same check from where the arm is, and the detail says so; else the
+    carry is ``unreachable``."""
     env, d, panda = x.env, x.env.data, x.env.panda
     env.ik.sync(d)
     lifted = Pose(*panda.tcp_pose(d))
     carry, _ = carry_pose(env.bin_centre_xy(), lifted, env.probe.position(d, x.target)[:2])
     restarts = env.config.execution.resolve_restarts
     sol = env.ik.solve(carry, x.motion.q_carry, env.rngs["ik"], restarts=restarts)
-    if not sol.ok:
-        return Outcome.UNREACHABLE, x.target, f"carry over the bin: {sol.reason}"
-    if problem := sweep_problem(env, panda.arm_q(d), sol.q):
-        return Outcome.UNREACHABLE, x.target, f"carry over the bin: {problem}"
-    reason = env.stepper.move_joints(sol.q, (x.hold,))
+    q = sol.q
+    problem = sol.reason if not sol.ok else sweep_problem(env, panda.arm_q(d), sol.q)
+    if problem:
+        if sweep_problem(env, panda.arm_q(d), x.motion.q_carry):
+            return Outcome.UNREACHABLE, x.target, f"carry over the bin: {problem}"
+        q, x.note = x.motion.q_carry, f" (carried as planned: re-solved carry {problem})"
+    reason = env.stepper.move_joints(q, (x.hold,))
     if reason:
-        return Outcome.DROPPED, x.target, f"during the carry: {reason}"
+        return Outcome.DROPPED, x.target, f"during the carry: {reason}{x.note}"
     return None
 
 
@@ -200,12 +206,12 @@ def _release(x: _Execution) -> Verdict:
     release is not a failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
-    note = ""
+    note = x.note
     drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
     if drop > cfg.execution.min_lowering_m:
         waypoints, depth, shift, problem = _lowering(env, drop)
         if problem and depth < drop:
-            note = f" (released {(drop - depth) * 100:.0f} cm higher: lowering {problem})"
+            note += f" (released {(drop - depth) * 100:.0f} cm higher: lowering {problem})"
         if shift:
             why = "" if depth < drop else f": straight down, {problem}"
             note += f" (lowered {shift * 100:.0f} cm off the bin centre, away from the wrist{why})"
