@@ -18,7 +18,13 @@ import pytest
 
 from hsqbench.planner.api import PlanResult
 from hsqbench.planner.grasp import Grasp
-from hsqbench.sim.motion import JointTrajectory, MotionConfig, SimUnstable, Stepper
+from hsqbench.sim.motion import (
+    JointTrajectory,
+    MotionConfig,
+    SimUnstable,
+    Stepper,
+    surface_speed_scale,
+)
 from hsqbench.sim.outcome import Outcome
 from hsqbench.sim.trial import (
     TrialConfig,
@@ -235,6 +241,29 @@ def test_motion_tracks_trajectories_and_detects_blow_ups(config):
         env.data.qvel[0] = np.nan
         with pytest.raises(SimUnstable):
             st.hold(0.05)
+
+
+def test_a_spinning_object_is_judged_by_the_speed_of_its_surface(config):
+    """A free body's angular velocity counts as the speed at its surface (x its bounding
+    radius): a small object spinning fast, as when the hand lets go of a pinched one, is not a
+    blown-up state; the same spin on a body as large as its limit implies is."""
+    with TrialEnv.build("isolated", "proc_box", 6, config) as env:
+        st, model = env.stepper, env.model
+        scale = surface_speed_scale(model)
+        free = model.joint("obj/proc_box/free").dofadr[0]
+        radius = float(scale[free + 3])
+        assert scale[free : free + 3].tolist() == [1.0, 1.0, 1.0]
+        assert 0.01 < radius < 0.3 and np.all(scale[free + 3 : free + 6] == radius)
+        assert np.all(scale[env.panda.arm_dof_adr] == 1.0)
+        limit = config.motion.max_speed
+        env.data.qvel[free + 5] = (
+            0.5 * limit / radius
+        )  # over the limit in rad/s, not at the surface
+        assert limit < env.data.qvel[free + 5]
+        st._check_stable()
+        env.data.qvel[free + 5] = 2.0 * limit / radius
+        with pytest.raises(SimUnstable, match="m/s"):
+            st._check_stable()
 
 
 def test_trajectory_profile_respects_limits():
