@@ -256,9 +256,8 @@ def test_a_spinning_object_is_judged_by_the_speed_of_its_surface(config):
         assert 0.01 < radius < 0.3 and np.all(scale[free + 3 : free + 6] == radius)
         assert np.all(scale[env.panda.arm_dof_adr] == 1.0)
         limit = config.motion.max_speed
-        env.data.qvel[free + 5] = (
-            0.5 * limit / radius
-        )  # over the limit in rad/s, not at the surface
+        # Over the limit in rad/s, not at the surface.
+        env.data.qvel[free + 5] = 0.5 * limit / radius
         assert limit < env.data.qvel[free + 5]
         st._check_stable()
         env.data.qvel[free + 5] = 2.0 * limit / radius

@@ -126,10 +126,10 @@ def _carry(x: _Execution) -> Verdict:
     carry, _ = carry_pose(env.bin_centre_xy(), lifted, env.probe.position(d, x.target)[:2])
     restarts = env.config.execution.resolve_restarts
     sol = env.ik.solve(carry, x.motion.q_carry, env.rngs["ik"], restarts=restarts)
-    q = sol.q
-    problem = sol.reason if not sol.ok else sweep_problem(env, panda.arm_q(d), sol.q)
+    q, here = sol.q, panda.arm_q(d)
+    problem = sol.reason if not sol.ok else sweep_problem(env, here, sol.q)
     if problem:
-        if sweep_problem(env, panda.arm_q(d), x.motion.q_carry):
+        if sweep_problem(env, here, x.motion.q_carry):
             return Outcome.UNREACHABLE, x.target, f"carry over the bin: {problem}"
         q, x.note = x.motion.q_carry, f" (carried as planned: re-solved carry {problem})"
     reason = env.stepper.move_joints(q, (x.hold,))
