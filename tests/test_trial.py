@@ -33,6 +33,7 @@ from hsqbench.sim.trial import (
     run_isolated_trial,
     run_packed_round,
 )
+from hsqbench.sim.trial.protocols import _clear
 
 TOP_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
 
@@ -222,7 +223,7 @@ def test_env_removes_objects_and_knows_the_bin(config):
         assert env.probe.in_bin(env.data, "proc_box")
         assert env.objects_on_table() == ["proc_cylinder"]
         env.remove("proc_box")
-        assert not env.probe.on_table(env.data, "proc_box")
+        assert not env.probe.in_workspace(env.data, "proc_box")
         parked = env.probe.position(env.data, "proc_box")
         env.stepper.hold(0.5)
         assert np.allclose(env.probe.position(env.data, "proc_box"), parked, atol=1e-3)
@@ -230,6 +231,24 @@ def test_env_removes_objects_and_knows_the_bin(config):
         # Only the cylinder is left to see.
         cyl = env.probe.position(env.data, "proc_cylinder")
         assert np.abs(obs.points[:, :2] - cyl[:2]).max() < 0.05
+
+
+def test_an_object_out_of_the_cameras_view_leaves_the_round_uncleared(config):
+    """An object pushed onto the table beyond the workspace the cameras crop to is no longer on
+    the table for the round: cleared with the bin's objects, it is taken out, not cleared."""
+    with TrialEnv.build("packed", ["proc_box", "proc_cylinder"], 5, config) as env:
+        beside = env.probe.position(env.data, "proc_box")
+        beside[0] = env.info.workspace_max[0] + env.crop_margin_m() + 0.05
+        env.probe.set_free_pose(env.data, "proc_box", beside)
+        env.stepper.hold(0.3)
+        # Still resting on the table top, only out of view.
+        assert env.probe.position(env.data, "proc_box")[2] > env.info.table_top_z
+        assert env.objects_on_table() == ["proc_cylinder"]
+        centre = 0.5 * (env.bin_box.lo + env.bin_box.hi)
+        env.probe.set_free_pose(env.data, "proc_cylinder", centre)
+        mujoco.mj_forward(env.model, env.data)
+        assert _clear(env) == (["proc_cylinder"], ["proc_box"])
+        assert env.removed == {"proc_box", "proc_cylinder"} and env.objects_on_table() == []
 
 
 def test_motion_tracks_trajectories_and_detects_blow_ups(config):

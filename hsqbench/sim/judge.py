@@ -82,7 +82,8 @@ class SceneProbe:
         object_bodies: object name -> body id.
         obstacle_geoms: table top and bin geoms.
         bin_box: the bin's inside.
-        table_box: the table top's extent (x, y) and the height band above it (z).
+        workspace_box: where an object takes part in a round: the cameras' view of the table
+            (x, y) and the height band above the table top (z).
     """
 
     def __init__(
@@ -92,7 +93,7 @@ class SceneProbe:
         object_bodies: dict[str, int],
         obstacle_geoms: NDArray[np.int_],
         bin_box: Box,
-        table_box: Box,
+        workspace_box: Box,
     ) -> None:
         self.model = model
         self.panda = panda
@@ -100,7 +101,7 @@ class SceneProbe:
         self.names = list(object_bodies)
         self.body_ids = np.array([object_bodies[n] for n in self.names], dtype=int)
         self.bin_box = bin_box
-        self.table_box = table_box
+        self.workspace_box = workspace_box
         self.elliptic = model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
         # Per geom: -1 robot, -2 obstacle, k >= 0 object index, -3 anything else.
         kind = np.full(model.ngeom, -3, dtype=int)
@@ -236,8 +237,8 @@ class SceneProbe:
     def in_bin(self, data: mujoco.MjData, name: str) -> bool:
         return self.bin_box.contains(self.position(data, name))
 
-    def on_table(self, data: mujoco.MjData, name: str) -> bool:
-        return self.table_box.contains(self.position(data, name))
+    def in_workspace(self, data: mujoco.MjData, name: str) -> bool:
+        return self.workspace_box.contains(self.position(data, name))
 
     def set_free_pose(
         self, data: mujoco.MjData, name: str, position: NDArray[np.float64], quat=(1, 0, 0, 0)

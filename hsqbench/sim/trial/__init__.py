@@ -48,7 +48,8 @@ One attempt (:func:`run_attempt`):
 Isolated trial (:func:`run_isolated_trial`): one object at a seeded random upright pose, one
 attempt. Packed round (:func:`run_packed_round`): the paper's rule, attempts until no object is
 left on the table or two consecutive failures; after each attempt the hand opens, the arm goes
-home, and objects in the bin (cleared) or off the table (not cleared) are taken out of the scene.
+home, and objects in the bin (cleared) or out of the workspace (off the table or out of the
+cameras' view: not cleared) are taken out of the scene.
 
 Determinism: everything random comes from ``seed`` (scene layout, sensor noise and calibration,
 planner seed, IK restarts, each from its own ``SeedSequence`` stream) and MuJoCo is deterministic,

@@ -54,14 +54,21 @@ class TrialEnv:
         #: (lo, hi) bounding box of the open hand in the TCP frame, metres.
         self.hand_box = self.ik.hand_extent()
         self.bin_box = Box(np.asarray(info.bin_min, float), np.asarray(info.bin_max, float))
-        table_half = np.asarray(model.geom_size[info.table_geom_id, :2])
-        table_c = np.asarray(model.geom_pos[info.table_geom_id, :2])
-        self.table_box = Box(
-            np.array([*(table_c - table_half), info.table_top_z - config.judge.off_table_below_m]),
-            np.array([*(table_c + table_half), info.table_top_z + 2.0]),
+        # Where an object still takes part: over the region the cameras keep (the workspace and
+        # the crop's margin) and not fallen below the table top. Outside it no planner can see
+        # it, so a packed round takes it out (not cleared) rather than plan on an empty cloud.
+        margin = self.crop_margin_m()
+        self.workspace_box = Box(
+            np.array(
+                [
+                    *(info.workspace_min[:2] - margin),
+                    info.table_top_z - config.judge.off_table_below_m,
+                ]
+            ),
+            np.array([*(info.workspace_max[:2] + margin), info.table_top_z + 2.0]),
         )
         self.probe = SceneProbe(
-            model, self.panda, info.object_body_ids, obstacles, self.bin_box, self.table_box
+            model, self.panda, info.object_body_ids, obstacles, self.bin_box, self.workspace_box
         )
         self.stepper = Stepper(model, data, self.panda, config.motion, recorder)
         self.removed: set[str] = set()
@@ -111,6 +118,13 @@ class TrialEnv:
         self.close()
 
     # ---- sensing -------------------------------------------------------------------------------
+    def crop_margin_m(self) -> float:
+        """How far beyond the workspace the sensor in use keeps points, metres."""
+        cfg = self.config
+        if cfg.sensor == "surface":
+            return cfg.surface.workspace_margin_m
+        return cfg.perception.crop.workspace_margin_m
+
     def _make_sensor(self) -> Any:
         cfg = self.config
         if cfg.sensor == "surface":
@@ -179,12 +193,13 @@ class TrialEnv:
 
     # ---- scene bookkeeping ---------------------------------------------------------------------
     def objects_on_table(self) -> list[str]:
-        """Objects not removed, resting on the table (not in the bin, not fallen off)."""
+        """Objects not removed, on the table in the workspace (not in the bin, not fallen off,
+        not pushed out of the cameras' view)."""
         return [
             n
             for n in self.info.objects
             if n not in self.removed
-            and self.probe.on_table(self.data, n)
+            and self.probe.in_workspace(self.data, n)
             and not self.probe.in_bin(self.data, n)
         ]
 

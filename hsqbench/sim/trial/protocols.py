@@ -41,19 +41,20 @@ def _planner_name(planner: Any) -> str:
     )
 
 
-def _clear(env: TrialEnv) -> list[str]:
-    """Take the objects in the bin (returned: cleared) and those off the table (not cleared)
-    out of the scene."""
-    cleared = []
+def _clear(env: TrialEnv) -> tuple[list[str], list[str]]:
+    """Take the objects in the bin (cleared) and those out of the workspace (fallen off the
+    table or out of the cameras' view: not cleared) out of the scene; returns both lists."""
+    cleared, lost = [], []
     for name in env.info.objects:
         if name in env.removed:
             continue
         if env.probe.in_bin(env.data, name):
             cleared.append(name)
             env.remove(name)
-        elif not env.probe.on_table(env.data, name):
+        elif not env.probe.in_workspace(env.data, name):
+            lost.append(name)
             env.remove(name)
-    return cleared
+    return cleared, lost
 
 
 def run_isolated_trial(
@@ -101,8 +102,9 @@ def run_packed_round(
     ends it: no object left on the table, ``max_consecutive_failures`` in a row, the attempt
     cap, or an unstable simulation.
 
-    Objects in the bin after an attempt are cleared; objects that fell off the table are removed
-    but not cleared. ``h_delta`` is off (``PlanningContext.packed``). ``kind="pile"``: the same
+    Objects in the bin after an attempt are cleared; objects out of the workspace (fallen off the
+    table, or pushed or dropped out of the cameras' view) are taken out but not cleared, as in
+    VGN's clutter removal: no planner could see them. ``h_delta`` is off (``PlanningContext.packed``). ``kind="pile"``: the same
     round on a pile scene (:mod:`hsqbench.sim.scene.pile`) under the config's ``pile:`` rule.
     """
     if kind not in ("packed", "pile"):
@@ -131,7 +133,10 @@ def run_packed_round(
             except SimUnstable as exc:
                 attempt.detail += f"; then the simulation became unstable going home: {exc}"
                 break
-            cleared += _clear(env)
+            done, lost = _clear(env)
+            cleared += done
+            if lost:
+                attempt.detail += f"; {', '.join(lost)} left the workspace (taken out, not cleared)"
         names = list(env.info.objects)
     return RoundResult(
         objects=names,
