@@ -453,19 +453,19 @@ def test_an_object_still_in_the_open_hand_is_withdrawn_from_along_the_approach(c
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
     assert attempt.outcome == Outcome.SUCCESS and "withdrawn" not in attempt.detail
     moves = []
-    real_withdraw = execution._withdraw
+    real_withdraw = execution.withdraw
 
-    def recorded(x):
-        before = x.env.panda.tcp_pose(x.env.data)
-        note = real_withdraw(x)
-        moves.append((before, x.env.panda.tcp_pose(x.env.data)[0]))
+    def recorded(env):
+        before = env.panda.tcp_pose(env.data)
+        note = real_withdraw(env)
+        moves.append((before, env.panda.tcp_pose(env.data)[0]))
         return note
 
     # The hand does not open: the box stays between the pads, over the bin.
     monkeypatch.setattr(
         Stepper, "open_hand", lambda self, width: self.panda.gripper_width(self.data)
     )
-    monkeypatch.setattr(execution, "_withdraw", recorded)
+    monkeypatch.setattr(execution, "withdraw", recorded)
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
     assert attempt.outcome == Outcome.DROPPED, attempt.detail
     assert attempt.detail.endswith("(withdrawn 8 cm to free it from the fingers)")
@@ -473,6 +473,27 @@ def test_an_object_still_in_the_open_hand_is_withdrawn_from_along_the_approach(c
     moved = p1 - p0
     assert np.linalg.norm(moved) == pytest.approx(config.execution.withdraw_m, abs=0.01)
     assert moved @ -r0[:, 2] > 0.95 * np.linalg.norm(moved)
+
+
+def test_going_home_backs_out_of_an_object_still_touching_a_finger(config, monkeypatch):
+    """Between a packed round's attempts the open hand first backs out along its approach while
+    an object touches a finger (one left in the bin hooked on it stays there), then rises and
+    goes home; with nothing on the fingers it rises at once."""
+    from hsqbench.sim.judge import SceneProbe
+    from hsqbench.sim.trial import protocols
+
+    withdrawn = []
+    monkeypatch.setattr(protocols, "withdraw", lambda env: withdrawn.append(1) or "")
+    with TrialEnv.build("packed", ["proc_box"], 5, config) as env:
+        protocols._return_home(env)
+        assert withdrawn == []
+        n = len(env.probe.names)
+        monkeypatch.setattr(
+            SceneProbe, "finger_contacts", lambda self, data: np.ones((n, 2), dtype=bool)
+        )
+        protocols._return_home(env)
+        assert withdrawn == [1]
+        assert np.abs(env.panda.arm_q(env.data) - env.panda.home_arm_q).max() < 0.01
 
 
 def test_a_blocked_lowering_is_tried_away_from_a_sideways_wrist_before_a_shorter_one(

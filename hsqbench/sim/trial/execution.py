@@ -179,12 +179,11 @@ def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, f
     return waypoints, depth, shift, problem
 
 
-def _withdraw(x: _Execution) -> str:
+def withdraw(env: TrialEnv) -> str:
     """Pull the open hand back along its approach axis, as a place motion ends: an object still
     hooked on a finger (a cup's wall between the open pads after a release from higher up)
     slides off it; one that already fell is not touched. Tried shorter as the lowering is.
     Returns the detail's note."""
-    env = x.env
     back = -env.panda.tcp_pose(env.data)[1][:, 2] * env.config.execution.withdraw_m
     fractions = env.config.execution.lowering_fractions
     waypoints, k, problem = _first_clear_line(env, [f * back for f in fractions])
@@ -202,7 +201,7 @@ def _release(x: _Execution) -> Verdict:
     away from the wrist, then shorter (:func:`_lowering`); when none can be run the hand opens
     where it is, over the bin. An object that slips or leaves a finger during the lowering is
     released there. An object not in the bin once the hand is open may still hang on a finger:
-    the hand is withdrawn along its approach (:func:`_withdraw`) before it is judged. A higher
+    the hand is withdrawn along its approach (:func:`withdraw`) before it is judged. A higher
     release is not a failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
@@ -224,7 +223,7 @@ def _release(x: _Execution) -> Verdict:
     env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
     env.stepper.hold(cfg.motion.fall_time_s)
     if not probe.in_bin(d, x.target):
-        note += _withdraw(x)
+        note += withdraw(env)
     if probe.in_bin(d, x.target):
         return Outcome.SUCCESS, x.target, "in the bin" + note
     where = probe.position(d, x.target).round(3).tolist()

@@ -14,13 +14,18 @@ from hsqbench.sim.recorder import Recorder
 from hsqbench.sim.trial.attempt import AttemptTrace, resolve_planner, run_attempt
 from hsqbench.sim.trial.config import TrialConfig, load_trial_config
 from hsqbench.sim.trial.env import TrialEnv
+from hsqbench.sim.trial.execution import withdraw
 
 
 def _return_home(env: TrialEnv) -> None:
-    """Open the hand, rise, and go home (between the attempts of a packed round)."""
+    """Open the hand, back out along the approach while an object still touches a finger (a
+    cup or bag in the bin hooked on one would otherwise be lifted out with the hand), rise, and
+    go home (between the attempts of a packed round)."""
     st, panda, d = env.stepper, env.panda, env.data
     st.phase = "home"
     st.open_hand(panda.max_width() - env.config.execution.release_gap_m)
+    if env.probe.finger_contacts(d).any():
+        withdraw(env)
     env.ik.sync(d)
     here = Pose(*panda.tcp_pose(d))
     up = env.ik.solve(
@@ -133,6 +138,10 @@ def run_packed_round(
             except SimUnstable as exc:
                 attempt.detail += f"; then the simulation became unstable going home: {exc}"
                 break
+            if attempt.outcome == Outcome.SUCCESS and not env.probe.in_bin(
+                env.data, attempt.target
+            ):
+                attempt.detail += "; then carried out of the bin by the hand going home"
             done, lost = _clear(env)
             cleared += done
             if lost:
