@@ -16,6 +16,7 @@ from hsqbench.experiment.report import (
     TABLE1_CSV,
     TABLE2_CSV,
     TIMES_PLOT,
+    load_run,
     write_report,
 )
 from hsqbench.experiment.runner import run_benchmark
@@ -167,6 +168,29 @@ def test_report_flags_rounds_that_break_the_stop_rule(tmp_path: Path) -> None:
     run_benchmark(config, tmp_path / "fine", backend=FakeBackend(), progress=False)
     write_report(tmp_path / "fine")
     assert "stop rule" not in (tmp_path / "fine" / "tables.md").read_text()
+
+
+class _LostRest(_EarlyStop):
+    """Ends each round after its first attempt with the objects not cleared taken out as lost
+    (out of the workspace), as the trial runner does: the table is then empty."""
+
+    def run_packed(self, objects, seed, planner):
+        result = super().run_packed(objects, seed, planner)
+        result.objects_lost = [o for o in result.objects if o not in result.objects_cleared]
+        return result
+
+
+def test_report_counts_objects_lost_out_of_the_workspace_as_off_the_table(tmp_path: Path) -> None:
+    config = ExperimentConfig(
+        planners=("hsq",),
+        isolated=IsolatedConfig(enabled=False),
+        packed=PackedConfig(objects=("mug", "bowl", "pear"), rounds=3, objects_per_round=3),
+    )
+    run_benchmark(config, tmp_path / "lost", backend=_LostRest(), progress=False)
+    write_report(tmp_path / "lost")
+    assert "stop rule" not in (tmp_path / "lost" / "tables.md").read_text()
+    rounds = load_run(tmp_path / "lost").rounds
+    assert (rounds["n_cleared"] + rounds["n_lost"] == 3).all() and (rounds["n_lost"] > 0).any()
 
 
 def test_report_reads_the_runs_own_stop_rule_and_accepts_the_attempt_cap(tmp_path: Path) -> None:

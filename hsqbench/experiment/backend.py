@@ -119,6 +119,13 @@ def _check_result(spec: TrialSpec, result: Any) -> None:
         extra = set(result.objects_cleared) - set(result.objects)
         if extra or len(set(result.objects_cleared)) != len(result.objects_cleared):
             raise ValueError(f"objects_cleared {result.objects_cleared} is not a subset of objects")
+        out = set(result.objects_cleared) | set(result.objects_lost)
+        if not out <= set(result.objects) or len(out) != len(result.objects_cleared) + len(
+            result.objects_lost
+        ):
+            raise ValueError(
+                f"objects_lost {result.objects_lost} must be objects neither cleared nor repeated"
+            )
 
 
 def execute_trial(backend: TrialBackend, spec: TrialSpec) -> TrialRun:

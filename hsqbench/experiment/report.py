@@ -71,7 +71,7 @@ class RunData:
 
 
 _NUMERIC = ("success", "attempt_index", "n_attempts", "base_seed", "planning_s", "trial_wall_s")
-_ROUND_NUMERIC = ("n_objects", "n_cleared", "n_attempts", "n_success", "base_seed")
+_ROUND_NUMERIC = ("n_objects", "n_cleared", "n_lost", "n_attempts", "n_success", "base_seed")
 
 
 def load_run(run_dir: str | Path) -> RunData:
@@ -120,7 +120,8 @@ def load_run(run_dir: str | Path) -> RunData:
         notes.append(
             f"{broken} packed or pile round(s) ended with objects left and without the stop rule's "
             "reasons (consecutive failures, the attempt cap, an unstable simulation): check the "
-            "trial runner's stop rule, or whether an object fell off the table"
+            "trial runner's stop rule (in a run older than the rounds' objects_lost column, an object "
+            "taken out of the workspace also looks left)"
         )
     confidence = float(config.get("confidence", 0.95))
     backend = meta.get("backend", {}).get("backend")
@@ -151,7 +152,9 @@ def _stop_rule_violations(attempts: pd.DataFrame, rounds: pd.DataFrame, meta: di
         rule = from_dict(PackedConfig, stored) if isinstance(stored, dict) else PackedConfig()
         tail = by_key.get(r["trial_key"])
         outcomes = [] if tail is None else [str(o) for o in tail["outcome"]]
-        if rule.ended_early(outcomes, objects_left=r["n_cleared"] < r["n_objects"]):
+        # Runs before objects_lost existed read it empty: an object lost there looks left.
+        out = r["n_cleared"] + (0 if pd.isna(r.get("n_lost")) else r["n_lost"])
+        if rule.ended_early(outcomes, objects_left=out < r["n_objects"]):
             count += 1
     return count
 

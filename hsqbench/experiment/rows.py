@@ -64,6 +64,8 @@ ROUND_COLUMNS = (
     "objects_cleared",
     "n_cleared",
     "clearance_rate",
+    "objects_lost",
+    "n_lost",
     "objects_graspable",
     "n_graspable",
     "n_attempts",
@@ -188,6 +190,8 @@ def rows_for(
             "objects_cleared": ";".join(result.objects_cleared),
             "n_cleared": len(result.objects_cleared),
             "clearance_rate": result.clearance_rate,
+            "objects_lost": ";".join(result.objects_lost),
+            "n_lost": len(result.objects_lost),
             "objects_graspable": (
                 None if result.objects_graspable is None else ";".join(result.objects_graspable)
             ),

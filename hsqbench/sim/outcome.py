@@ -100,6 +100,8 @@ class RoundResult:
 
     ``objects_graspable``: the objects on which the oracle found a feasible grasp in the
     settled scene, before the first attempt (None when not checked).
+    ``objects_lost``: those taken out of the round without being cleared (out of the workspace:
+    fallen off the table, or pushed or dropped out of the cameras' view).
     """
 
     objects: list[str]
@@ -108,6 +110,7 @@ class RoundResult:
     attempts: list[Attempt]
     objects_cleared: list[str]
     objects_graspable: list[str] | None = None
+    objects_lost: list[str] = field(default_factory=list)
 
     @property
     def objects_presented(self) -> int:
@@ -126,5 +129,6 @@ class RoundResult:
             "objects_presented": self.objects_presented,
             "objects_cleared": list(self.objects_cleared),
             "objects_graspable": self.objects_graspable,
+            "objects_lost": list(self.objects_lost),
             "attempts": [a.to_dict() for a in self.attempts],
         }

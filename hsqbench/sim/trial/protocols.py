@@ -119,6 +119,7 @@ def run_packed_round(
     plan = resolve_planner(planner, cfg)
     attempts: list[Attempt] = []
     cleared: list[str] = []
+    lost_all: list[str] = []
     graspable: list[str] | None = None
     outcomes: list[str] = []
     with TrialEnv.build(kind, objects, seed, cfg, recorder) as env:
@@ -144,6 +145,7 @@ def run_packed_round(
                 attempt.detail += "; then carried out of the bin by the hand going home"
             done, lost = _clear(env)
             cleared += done
+            lost_all += lost
             if lost:
                 attempt.detail += f"; {', '.join(lost)} left the workspace (taken out, not cleared)"
         names = list(env.info.objects)
@@ -154,4 +156,5 @@ def run_packed_round(
         attempts=attempts,
         objects_cleared=cleared,
         objects_graspable=graspable,
+        objects_lost=lost_all,
     )
