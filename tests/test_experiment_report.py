@@ -146,6 +146,15 @@ def test_report_command(run_dir: Path, capsys) -> None:
     assert "not a folder" in capsys.readouterr().err
 
 
+def _three_rounds_of_three() -> ExperimentConfig:
+    """hsq alone, packed only: three rounds of the same three objects."""
+    return ExperimentConfig(
+        planners=("hsq",),
+        isolated=IsolatedConfig(enabled=False),
+        packed=PackedConfig(objects=("mug", "bowl", "pear"), rounds=3, objects_per_round=3),
+    )
+
+
 class _EarlyStop(FakeBackend):
     """Ends every packed round after its first attempt, breaking the paper's stop rule."""
 
@@ -157,11 +166,7 @@ class _EarlyStop(FakeBackend):
 
 
 def test_report_flags_rounds_that_break_the_stop_rule(tmp_path: Path) -> None:
-    config = ExperimentConfig(
-        planners=("hsq",),
-        isolated=IsolatedConfig(enabled=False),
-        packed=PackedConfig(objects=("mug", "bowl", "pear"), rounds=3, objects_per_round=3),
-    )
+    config = _three_rounds_of_three()
     run_benchmark(config, tmp_path / "early", backend=_EarlyStop(), progress=False)
     write_report(tmp_path / "early")
     assert "check the trial runner's stop rule" in (tmp_path / "early" / "tables.md").read_text()
@@ -181,11 +186,7 @@ class _LostRest(_EarlyStop):
 
 
 def test_report_counts_objects_lost_out_of_the_workspace_as_off_the_table(tmp_path: Path) -> None:
-    config = ExperimentConfig(
-        planners=("hsq",),
-        isolated=IsolatedConfig(enabled=False),
-        packed=PackedConfig(objects=("mug", "bowl", "pear"), rounds=3, objects_per_round=3),
-    )
+    config = _three_rounds_of_three()
     run_benchmark(config, tmp_path / "lost", backend=_LostRest(), progress=False)
     write_report(tmp_path / "lost")
     assert "stop rule" not in (tmp_path / "lost" / "tables.md").read_text()
@@ -199,11 +200,7 @@ def test_report_reads_the_runs_own_stop_rule_and_accepts_the_attempt_cap(tmp_pat
     not flagged."""
     from hsqbench.sim.stop_rule import PackedConfig as StopRule
 
-    config = ExperimentConfig(
-        planners=("hsq",),
-        isolated=IsolatedConfig(enabled=False),
-        packed=PackedConfig(objects=("mug", "bowl", "pear"), rounds=3, objects_per_round=3),
-    )
+    config = _three_rounds_of_three()
     capped = FakeBackend(default_success=0.3, stop_rule=StopRule(5, max_attempts=2))
     run_benchmark(config, tmp_path / "capped", backend=capped, progress=False)
     write_report(tmp_path / "capped")

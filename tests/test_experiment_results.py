@@ -172,3 +172,16 @@ def test_backend_answering_another_trial_is_an_error() -> None:
 
     run = execute_trial(WrongSeed(), ISO)
     assert not run.ok and "another trial" in run.error
+
+
+def test_backend_counting_an_object_both_cleared_and_lost_is_an_error() -> None:
+    class Twice(FakeBackend):
+        def run_packed(self, objects, seed, planner):
+            result = super().run_packed(objects, seed, planner)
+            result.objects_cleared = [objects[0]]
+            result.objects_lost = [objects[0]]
+            return result
+
+    run = execute_trial(Twice(), PACKED)
+    assert not run.ok and "must be distinct objects of the round" in run.error
+    assert execute_trial(FakeBackend(), PACKED).ok

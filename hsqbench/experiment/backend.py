@@ -116,15 +116,11 @@ def _check_result(spec: TrialSpec, result: Any) -> None:
         if not isinstance(a, Attempt) or not isinstance(a.outcome, Outcome):
             raise TypeError(f"attempts must be Attempt records with an Outcome, got {a!r}")
     if isinstance(result, RoundResult):
-        extra = set(result.objects_cleared) - set(result.objects)
-        if extra or len(set(result.objects_cleared)) != len(result.objects_cleared):
-            raise ValueError(f"objects_cleared {result.objects_cleared} is not a subset of objects")
-        out = set(result.objects_cleared) | set(result.objects_lost)
-        if not out <= set(result.objects) or len(out) != len(result.objects_cleared) + len(
-            result.objects_lost
-        ):
+        out = [*result.objects_cleared, *result.objects_lost]
+        if not set(out) <= set(result.objects) or len(set(out)) != len(out):
             raise ValueError(
-                f"objects_lost {result.objects_lost} must be objects neither cleared nor repeated"
+                f"objects_cleared {result.objects_cleared} and objects_lost "
+                f"{result.objects_lost} must be distinct objects of the round"
             )
 
 

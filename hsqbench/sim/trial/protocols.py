@@ -109,8 +109,8 @@ def run_packed_round(
 
     Objects in the bin after an attempt are cleared; objects out of the workspace (fallen off the
     table, or pushed or dropped out of the cameras' view) are taken out but not cleared, as in
-    VGN's clutter removal: no planner could see them. ``h_delta`` is off (``PlanningContext.packed``). ``kind="pile"``: the same
-    round on a pile scene (:mod:`hsqbench.sim.scene.pile`) under the config's ``pile:`` rule.
+    VGN's clutter removal: no planner could see them. ``h_delta`` is off
+    (``PlanningContext.packed``). ``kind="pile"``: the same round on a pile scene (:mod:`hsqbench.sim.scene.pile`) under the config's ``pile:`` rule.
     """
     if kind not in ("packed", "pile"):
         raise ValueError(f"a clutter-removal round is packed or pile, got {kind!r}")
