@@ -1,7 +1,7 @@
 """Replay recorded isolated attempts with today's code: does a change turn these outcomes?
 
     python bench/replay_attempts.py RUN [RUN ...] --detail "not in the bin" [--outcome dropped]
-        [--sample N] [--out replay.csv]
+        [--planner hsq] [--graspable] [--min-width-m W] [--sample N] [--out replay.csv]
 
 Selects isolated attempts of the runs' ``attempts.csv`` whose detail contains ``--detail`` (and
 whose outcome is ``--outcome``), replays each from its object, seed and planner with the run's
@@ -23,7 +23,20 @@ import pandas as pd
 from hsqbench.sim.trial import load_trial_config, run_isolated_trial
 
 
-def _selected(run: Path, args: argparse.Namespace) -> pd.DataFrame:
+def add_selection_args(p: argparse.ArgumentParser) -> None:
+    """The attempt filters this script and ``bench/grasp_clearance.py`` share."""
+    p.add_argument("runs", nargs="+", type=Path)
+    p.add_argument("--detail", default="", help="substring of the attempt's detail")
+    p.add_argument("--outcome", default="", help="only attempts with this recorded outcome")
+    p.add_argument("--planner", default="", help="only attempts of this planner")
+    p.add_argument("--graspable", action="store_true", help="only graspable presentations")
+    p.add_argument("--min-width-m", type=float, default=0.0, help="only grasps this wide")
+    p.add_argument("--sample", type=int, default=0, help="at most this many per run, drawn")
+    p.add_argument("--sample-seed", type=int, default=0)
+
+
+def select_attempts(run: Path, args: argparse.Namespace) -> pd.DataFrame:
+    """The isolated attempts of ``run`` that pass the filters of :func:`add_selection_args`."""
     csv = run / "attempts.csv"
     rows = pd.read_csv(csv if csv.exists() else run / "attempts.csv.gz")
     rows = rows[rows.experiment == "isolated"]
@@ -31,6 +44,12 @@ def _selected(run: Path, args: argparse.Namespace) -> pd.DataFrame:
         rows = rows[rows.detail.str.contains(args.detail, regex=False, na=False)]
     if args.outcome:
         rows = rows[rows.outcome == args.outcome]
+    if args.planner:
+        rows = rows[rows.planner == args.planner]
+    if args.graspable:
+        rows = rows[rows.graspable == 1]
+    if args.min_width_m:
+        rows = rows[rows.width_m >= args.min_width_m]
     if args.sample and len(rows) > args.sample:
         rows = rows.sample(args.sample, random_state=args.sample_seed)
     rows = rows.assign(
@@ -41,14 +60,10 @@ def _selected(run: Path, args: argparse.Namespace) -> pd.DataFrame:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("runs", nargs="+", type=Path)
-    p.add_argument("--detail", default="", help="substring of the attempt's detail")
-    p.add_argument("--outcome", default="", help="only attempts with this recorded outcome")
-    p.add_argument("--sample", type=int, default=0, help="at most this many per run, drawn")
-    p.add_argument("--sample-seed", type=int, default=0)
+    add_selection_args(p)
     p.add_argument("--out", type=Path, help="CSV of key, old, new, new detail")
     args = p.parse_args(argv)
-    rows = pd.concat([_selected(run, args) for run in args.runs])
+    rows = pd.concat([select_attempts(run, args) for run in args.runs])
     if rows.empty:
         print("no attempt matches", file=sys.stderr)
         return 1
