@@ -247,8 +247,25 @@ def test_an_object_out_of_the_cameras_view_leaves_the_round_uncleared(config):
         centre = 0.5 * (env.bin_box.lo + env.bin_box.hi)
         env.probe.set_free_pose(env.data, "proc_cylinder", centre)
         mujoco.mj_forward(env.model, env.data)
-        assert _clear(env) == (["proc_cylinder"], ["proc_box"])
+        assert _clear(env) == (["proc_cylinder"], {"proc_box": "left the workspace"})
         assert env.removed == {"proc_box", "proc_cylinder"} and env.objects_on_table() == []
+
+
+def test_an_object_left_on_the_hand_at_home_is_taken_out_uncleared(config):
+    """An object touching a finger (wedged between the open pads, or hooked) is on the hand and
+    on the robot; with the hand at home it is taken out of the round, not cleared, even over
+    the bin, so that it neither counts nor rides into the next attempt."""
+    with TrialEnv.build("packed", ["proc_box", "proc_cylinder"], 5, config) as env:
+        assert env.probe.on_robot(env.data) == []
+        assert not env.probe.on_hand(env.data, "proc_box")
+        finger = env.model.body("panda/left_finger").id
+        pads = (env.model.geom_bodyid == finger) & (env.model.geom_contype > 0)
+        env.probe.set_free_pose(env.data, "proc_box", env.data.geom_xpos[pads].mean(axis=0))
+        mujoco.mj_forward(env.model, env.data)
+        assert env.probe.on_hand(env.data, "proc_box")
+        assert env.probe.on_robot(env.data) == ["proc_box"]
+        assert _clear(env) == ([], {"proc_box": "stayed on the hand"})
+        assert env.removed == {"proc_box"} and env.objects_on_table() == ["proc_cylinder"]
 
 
 def test_motion_tracks_trajectories_and_detects_blow_ups(config):
@@ -473,6 +490,31 @@ def test_an_object_still_in_the_open_hand_is_withdrawn_from_along_the_approach(c
     moved = p1 - p0
     assert np.linalg.norm(moved) == pytest.approx(config.execution.withdraw_m, abs=0.01)
     assert moved @ -r0[:, 2] > 0.95 * np.linalg.norm(moved)
+
+
+def test_an_object_in_the_bin_still_on_the_open_hand_is_withdrawn_from_then_judged(
+    config, monkeypatch
+):
+    """An object in the bin that still touches a finger once the hand is open makes the hand
+    pull back along its approach; it succeeds only if it is then free of the fingers (one
+    wedged between the open pads would leave with the hand)."""
+    from hsqbench.sim.judge import SceneProbe
+    from hsqbench.sim.trial import execution
+
+    withdrawn = []
+    monkeypatch.setattr(execution, "withdraw", lambda env: withdrawn.append(1) or " (withdrawn)")
+    for freed, outcome, detail in (
+        (True, Outcome.SUCCESS, "in the bin"),
+        (False, Outcome.DROPPED, "still on the open hand after the release"),
+    ):
+        withdrawn.clear()
+        monkeypatch.setattr(
+            SceneProbe, "on_hand", lambda self, data, name, f=freed: not (f and withdrawn)
+        )
+        [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+        assert withdrawn == [1]
+        assert attempt.outcome == outcome, attempt.detail
+        assert attempt.detail.startswith(detail) and attempt.detail.endswith(" (withdrawn)")
 
 
 def test_going_home_backs_out_of_an_object_still_touching_a_finger(config, monkeypatch):

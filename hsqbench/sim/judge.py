@@ -186,6 +186,15 @@ class SceneProbe:
         both = self.finger_contacts(data).all(axis=1)
         return [self.names[k] for k in np.flatnonzero(both)]
 
+    def on_hand(self, data: mujoco.MjData, name: str) -> bool:
+        """Whether the object touches a finger (after an opening: hooked on it or wedged
+        between the open pads)."""
+        return bool(self.finger_contacts(data)[self.names.index(name)].any())
+
+    def on_robot(self, data: mujoco.MjData) -> list[str]:
+        """Objects touching any robot part."""
+        return [self.names[k] for k in np.flatnonzero(self.robot_forces(data)[1] > 0.0)]
+
     # ---- object state --------------------------------------------------------------------------
     def position(self, data: mujoco.MjData, name: str) -> NDArray[np.float64]:
         """World position of the object's centre of mass, metres."""

@@ -200,9 +200,11 @@ def _release(x: _Execution) -> Verdict:
     rest. A lowering that cannot be solved or would sweep the arm into the bin is tried moved
     away from the wrist, then shorter (:func:`_lowering`); when none can be run the hand opens
     where it is, over the bin. An object that slips or leaves a finger during the lowering is
-    released there. An object not in the bin once the hand is open may still hang on a finger:
-    the hand is withdrawn along its approach (:func:`withdraw`) before it is judged. A higher
-    release is not a failure; the detail says so."""
+    released there. An object not in the bin once the hand is open, or still touching a finger,
+    may hang on one: the hand is withdrawn along its approach (:func:`withdraw`) before it is
+    judged. The release succeeds when the object lies in the bin free of the fingers; one still
+    on them (wedged between the open pads) would leave with the hand. A higher release is not a
+    failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
     note = x.note
@@ -222,12 +224,15 @@ def _release(x: _Execution) -> Verdict:
                 note += f" (lost while lowering: {reason})"
     env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
     env.stepper.hold(cfg.motion.fall_time_s)
-    if not probe.in_bin(d, x.target):
+    if not probe.in_bin(d, x.target) or probe.on_hand(d, x.target):
         note += withdraw(env)
-    if probe.in_bin(d, x.target):
-        return Outcome.SUCCESS, x.target, "in the bin" + note
     where = probe.position(d, x.target).round(3).tolist()
-    return Outcome.DROPPED, x.target, f"released but not in the bin (at {where} m){note}"
+    if not probe.in_bin(d, x.target):
+        return Outcome.DROPPED, x.target, f"released but not in the bin (at {where} m){note}"
+    if probe.on_hand(d, x.target):
+        # Wedged between the open pads or hooked on one: the hand would carry it away.
+        return Outcome.DROPPED, x.target, f"still on the open hand after the release{note}"
+    return Outcome.SUCCESS, x.target, "in the bin" + note
 
 
 #: The phases in order, by the names the stepper, the recorder and the phase times use.

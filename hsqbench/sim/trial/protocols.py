@@ -46,19 +46,25 @@ def _planner_name(planner: Any) -> str:
     )
 
 
-def _clear(env: TrialEnv) -> tuple[list[str], list[str]]:
-    """Take the objects in the bin (cleared) and those out of the workspace (fallen off the
-    table or out of the cameras' view: not cleared) out of the scene; returns both lists."""
-    cleared, lost = [], []
+def _clear(env: TrialEnv) -> tuple[list[str], dict[str, str]]:
+    """Take out of the scene, with the hand at home, the objects in the bin (cleared), those
+    still on the hand (carried away, as an operator would take them off it) and those out of
+    the workspace (fallen off the table or out of the cameras' view); the last two are not
+    cleared. Returns the cleared names and the others' names with why."""
+    cleared, lost = [], {}
+    carried = env.probe.on_robot(env.data)
     for name in env.info.objects:
         if name in env.removed:
             continue
-        if env.probe.in_bin(env.data, name):
+        if name in carried:
+            lost[name] = "stayed on the hand"
+        elif env.probe.in_bin(env.data, name):
             cleared.append(name)
-            env.remove(name)
         elif not env.probe.in_workspace(env.data, name):
-            lost.append(name)
-            env.remove(name)
+            lost[name] = "left the workspace"
+        else:
+            continue
+        env.remove(name)
     return cleared, lost
 
 
@@ -145,9 +151,9 @@ def run_packed_round(
                 attempt.detail += "; then carried out of the bin by the hand going home"
             done, lost = _clear(env)
             cleared += done
-            lost_all += lost
-            if lost:
-                attempt.detail += f"; {', '.join(lost)} left the workspace (taken out, not cleared)"
+            lost_all += list(lost)
+            for name, why in lost.items():
+                attempt.detail += f"; {name} {why} (taken out, not cleared)"
         names = list(env.info.objects)
     return RoundResult(
         objects=names,
