@@ -23,7 +23,6 @@ the recorded one unless the code changed since.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections import Counter
 from pathlib import Path
@@ -34,7 +33,7 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from replay_attempts import add_selection_args, select_attempts
+from replay_attempts import parse_and_select
 
 from hsqbench.planner import get_planner
 from hsqbench.planner.api import resolve_gripper
@@ -114,13 +113,9 @@ def side_measures(
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_selection_args(p)
-    p.add_argument("--out", type=Path, help="CSV of the measures per attempt")
-    args = p.parse_args(argv)
-    rows = pd.concat([select_attempts(run, args) for run in args.runs])
+    desc = __doc__.splitlines()[0]
+    args, rows = parse_and_select(desc, "CSV of the measures per attempt", argv)
     if rows.empty:
-        print("no attempt matches", file=sys.stderr)
         return 1
     rng = np.random.default_rng(0)
     out = []

@@ -58,14 +58,25 @@ def select_attempts(run: Path, args: argparse.Namespace) -> pd.DataFrame:
     return rows
 
 
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def parse_and_select(
+    description: str, out_help: str, argv: list[str] | None
+) -> tuple[argparse.Namespace, pd.DataFrame]:
+    """The shared command line (filters and ``--out``) and the attempts it selects over the runs;
+    an empty selection is said on stderr."""
+    p = argparse.ArgumentParser(description=description)
     add_selection_args(p)
-    p.add_argument("--out", type=Path, help="CSV of key, old, new, new detail")
+    p.add_argument("--out", type=Path, help=out_help)
     args = p.parse_args(argv)
     rows = pd.concat([select_attempts(run, args) for run in args.runs])
     if rows.empty:
         print("no attempt matches", file=sys.stderr)
+    return args, rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    desc = __doc__.splitlines()[0]
+    args, rows = parse_and_select(desc, "CSV of key, old, new, new detail", argv)
+    if rows.empty:
         return 1
     out = []
     for r in rows.itertuples():

@@ -101,7 +101,8 @@ class RoundResult:
     ``objects_graspable``: the objects on which the oracle found a feasible grasp in the
     settled scene, before the first attempt (None when not checked).
     ``objects_lost``: those taken out of the round without being cleared (out of the workspace:
-    fallen off the table, or pushed or dropped out of the cameras' view).
+    fallen off the table, or pushed or dropped out of the cameras' view; or still on the hand
+    once it is back home).
     """
 
     objects: list[str]
