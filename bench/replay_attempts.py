@@ -2,11 +2,13 @@
 
     python bench/replay_attempts.py RUN [RUN ...] --detail "not in the bin" [--outcome dropped]
         [--planner hsq] [--graspable] [--min-width-m W] [--sample N] [--out replay.csv]
+        [--set execution.release_height_m=0.01 ...]
 
 Selects isolated attempts of the runs' ``attempts.csv`` whose detail contains ``--detail`` (and
 whose outcome is ``--outcome``), replays each from its object, seed and planner with the run's
 trial config (``run.json``), and prints old -> new per attempt and a transition table. A replay
-of unchanged code gives the recorded outcome (same seed, same trial). One process; pair it with
+of unchanged code gives the recorded outcome (same seed, same trial). ``--set`` replays under
+changed trial-config values (``load_trial_config``'s overrides, YAML-parsed). One process; pair it with
 ``--sample`` of the successes to check that a fix breaks none.
 """
 
@@ -16,9 +18,12 @@ import argparse
 import json
 import sys
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
+import yaml
 
 from hsqbench.sim.trial import load_trial_config, run_isolated_trial
 
@@ -59,13 +64,18 @@ def select_attempts(run: Path, args: argparse.Namespace) -> pd.DataFrame:
 
 
 def parse_and_select(
-    description: str, out_help: str, argv: list[str] | None
+    description: str,
+    out_help: str,
+    argv: list[str] | None,
+    extra: Callable[[argparse.ArgumentParser], None] | None = None,
 ) -> tuple[argparse.Namespace, pd.DataFrame]:
-    """The shared command line (filters and ``--out``) and the attempts it selects over the runs;
-    an empty selection is said on stderr."""
+    """The shared command line (filters, ``--out`` and a script's ``extra`` arguments) and the
+    attempts it selects over the runs; an empty selection is said on stderr."""
     p = argparse.ArgumentParser(description=description)
     add_selection_args(p)
     p.add_argument("--out", type=Path, help=out_help)
+    if extra is not None:
+        extra(p)
     args = p.parse_args(argv)
     rows = pd.concat([select_attempts(run, args) for run in args.runs])
     if rows.empty:
@@ -73,15 +83,41 @@ def parse_and_select(
     return args, rows
 
 
+def _overrides(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="replay with this trial-config value changed (repeatable)",
+    )
+
+
+def parse_overrides(items: list[str]) -> dict[str, Any]:
+    """``["a.b=0.01", ...]`` as ``{"a.b": 0.01}`` (values parsed as YAML)."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise SystemExit(
+                f"--set {item!r}: write KEY=VALUE, e.g. execution.release_height_m=0.01"
+            )
+        out[key.strip()] = yaml.safe_load(value)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     desc = __doc__.splitlines()[0]
-    args, rows = parse_and_select(desc, "CSV of key, old, new, new detail", argv)
+    args, rows = parse_and_select(desc, "CSV of key, old, new, new detail", argv, _overrides)
     if rows.empty:
         return 1
+    overrides = parse_overrides(args.set)
     out = []
     for r in rows.itertuples():
         obj = r.trial_key.split("/")[3]  # isolated/<planner>/s<seed>/<object>/<index>
-        attempt = run_isolated_trial(obj, int(r.seed), r.planner, load_trial_config(r.trial_config))
+        attempt = run_isolated_trial(
+            obj, int(r.seed), r.planner, load_trial_config(r.trial_config, overrides)
+        )
         new = attempt.attempts[0]
         out.append(
             {

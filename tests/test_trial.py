@@ -517,6 +517,34 @@ def test_an_object_in_the_bin_still_on_the_open_hand_is_withdrawn_from_then_judg
         assert attempt.detail.startswith(detail) and attempt.detail.endswith(" (withdrawn)")
 
 
+def test_the_no_slip_pass_is_off_from_the_release_opening_and_set_back_after(config, monkeypatch):
+    """The grasp closes with the solver's no-slip pass (it stops a squeezed grasp creeping) and
+    the hand opens over the bin with ``physics.open_hand_noslip_iterations``; the model keeps
+    its own value for the next attempt, also when the release raises."""
+    from hsqbench.sim.motion import Stepper
+    from hsqbench.sim.trial import execution
+
+    seen = []
+    for name in ("close_hand", "open_hand"):
+        real = getattr(Stepper, name)
+
+        def spy(self, *a, _real=real, _name=name):
+            seen.append((_name, int(self.model.opt.noslip_iterations)))
+            return _real(self, *a)
+
+        monkeypatch.setattr(Stepper, name, spy)
+    [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    kept, opened = config.physics.noslip_iterations, config.physics.open_hand_noslip_iterations
+    assert kept != opened
+    assert ("close_hand", kept) in seen and seen[-1] == ("open_hand", opened)
+    with TrialEnv.build("isolated", "proc_box", 1, config) as env:
+        with pytest.raises(RuntimeError), execution.open_hand_contacts(env):
+            assert env.model.opt.noslip_iterations == opened
+            raise RuntimeError("a failed release")
+        assert env.model.opt.noslip_iterations == kept
+
+
 def test_going_home_backs_out_of_an_object_still_touching_a_finger(config, monkeypatch):
     """Between a packed round's attempts the open hand first backs out along its approach while
     an object touches a finger (one left in the bin hooked on it stays there), then rises and

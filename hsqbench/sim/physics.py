@@ -62,6 +62,8 @@ class PhysicsConfig:
         iterations, ls_iterations: main solver and line-search iteration limits.
         tolerance: main solver tolerance.
         noslip_iterations: post-solve iterations that remove residual slip (0 = off).
+        open_hand_noslip_iterations: the same once the hand has opened to release an object,
+            until it is home (:func:`hsqbench.sim.trial.execution.open_hand_contacts`).
         objects: contact parameters of object collision hulls.
         table: contact parameters of the table top and the bin.
         settle_time_s: simulated time given to a new scene to come to rest.
@@ -78,6 +80,7 @@ class PhysicsConfig:
     ls_iterations: int = 50
     tolerance: float = 1e-8
     noslip_iterations: int = 10
+    open_hand_noslip_iterations: int = 0
     # The defaults are configs/physics.yaml's (tests/test_config_defaults.py): the table's
     # contact is ContactConfig's; objects grip better and twist less (friction 0.8, condim 4).
     objects: ContactConfig = field(

@@ -4,7 +4,8 @@ by the rules of :mod:`hsqbench.sim.judge`."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -179,6 +180,21 @@ def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, f
     return waypoints, depth, shift, problem
 
 
+@contextmanager
+def open_hand_contacts(env: TrialEnv) -> Iterator[None]:
+    """The solver's no-slip pass set to ``physics.open_hand_noslip_iterations`` while the open
+    hand lets go of an object and backs out of it, and set back after: it exists to stop a
+    squeezed grasp creeping, and on an open finger it would hold an object jammed there by
+    interpenetrating hulls, by friction on forces the open hand does not exert."""
+    opt = env.model.opt
+    kept = opt.noslip_iterations
+    opt.noslip_iterations = env.config.physics.open_hand_noslip_iterations
+    try:
+        yield
+    finally:
+        opt.noslip_iterations = kept
+
+
 def withdraw(env: TrialEnv) -> str:
     """Pull the open hand back along its approach axis, as a place motion ends: an object still
     hooked on a finger (a cup's wall between the open pads after a release from higher up)
@@ -202,7 +218,7 @@ def _release(x: _Execution) -> Verdict:
     where it is, over the bin. An object that slips or leaves a finger during the lowering is
     released there. An object not in the bin once the hand is open, or still touching a finger,
     may hang on one: the hand is withdrawn along its approach (:func:`withdraw`) before it is
-    judged. The release succeeds when the object lies in the bin free of the fingers; one still
+    judged. From the opening on, the contacts are :func:`open_hand_contacts`'. The release succeeds when the object lies in the bin free of the fingers; one still
     on them (wedged between the open pads) would leave with the hand. A higher release is not a
     failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
@@ -222,10 +238,11 @@ def _release(x: _Execution) -> Verdict:
             # stops and opens as for a release, and where the object comes to rest decides.
             if reason := env.stepper.follow(traj, (x.hold,)):
                 note += f" (lost while lowering: {reason})"
-    env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
-    env.stepper.hold(cfg.motion.fall_time_s)
-    if not probe.in_bin(d, x.target) or probe.on_hand(d, x.target):
-        note += withdraw(env)
+    with open_hand_contacts(env):
+        env.stepper.open_hand(x.held_width_m + cfg.execution.release_gap_m)
+        env.stepper.hold(cfg.motion.fall_time_s)
+        if not probe.in_bin(d, x.target) or probe.on_hand(d, x.target):
+            note += withdraw(env)
     where = probe.position(d, x.target).round(3).tolist()
     if not probe.in_bin(d, x.target):
         return Outcome.DROPPED, x.target, f"released but not in the bin (at {where} m){note}"

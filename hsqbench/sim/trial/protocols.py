@@ -14,28 +14,29 @@ from hsqbench.sim.recorder import Recorder
 from hsqbench.sim.trial.attempt import AttemptTrace, resolve_planner, run_attempt
 from hsqbench.sim.trial.config import TrialConfig, load_trial_config
 from hsqbench.sim.trial.env import TrialEnv
-from hsqbench.sim.trial.execution import withdraw
+from hsqbench.sim.trial.execution import open_hand_contacts, withdraw
 
 
 def _return_home(env: TrialEnv) -> None:
     """Open the hand, back out along the approach while an object still touches a finger (a
     cup or bag in the bin hooked on one would otherwise be lifted out with the hand), rise, and
-    go home (between the attempts of a packed round)."""
+    go home (between the attempts of a packed round), with :func:`open_hand_contacts`."""
     st, panda, d = env.stepper, env.panda, env.data
     st.phase = "home"
-    st.open_hand(panda.max_width() - env.config.execution.release_gap_m)
-    if env.probe.finger_contacts(d).any():
-        withdraw(env)
-    env.ik.sync(d)
-    here = Pose(*panda.tcp_pose(d))
-    up = env.ik.solve(
-        here.moved([0.0, 0.0, env.config.execution.retreat_height_m]),
-        panda.arm_q(d),
-        restarts=env.config.execution.resolve_restarts,
-    )
-    if up.ok:
-        st.move_joints(up.q, settle=False)
-    st.move_joints(panda.home_arm_q)
+    with open_hand_contacts(env):
+        st.open_hand(panda.max_width() - env.config.execution.release_gap_m)
+        if env.probe.finger_contacts(d).any():
+            withdraw(env)
+        env.ik.sync(d)
+        here = Pose(*panda.tcp_pose(d))
+        up = env.ik.solve(
+            here.moved([0.0, 0.0, env.config.execution.retreat_height_m]),
+            panda.arm_q(d),
+            restarts=env.config.execution.resolve_restarts,
+        )
+        if up.ok:
+            st.move_joints(up.q, settle=False)
+        st.move_joints(panda.home_arm_q)
 
 
 def _planner_name(planner: Any) -> str:
