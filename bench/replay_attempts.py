@@ -8,8 +8,8 @@ Selects isolated attempts of the runs' ``attempts.csv`` whose detail contains ``
 whose outcome is ``--outcome``), replays each from its object, seed and planner with the run's
 trial config (``run.json``), and prints old -> new per attempt and a transition table. A replay
 of unchanged code gives the recorded outcome (same seed, same trial). ``--set`` replays under
-changed trial-config values (``load_trial_config``'s overrides, YAML-parsed). One process; pair it with
-``--sample`` of the successes to check that a fix breaks none.
+changed trial-config values (``load_trial_config``'s overrides, YAML-parsed). One process; pair
+it with ``--sample`` of the successes to check that a fix breaks none.
 """
 
 from __future__ import annotations

@@ -218,8 +218,9 @@ def _release(x: _Execution) -> Verdict:
     where it is, over the bin. An object that slips or leaves a finger during the lowering is
     released there. An object not in the bin once the hand is open, or still touching a finger,
     may hang on one: the hand is withdrawn along its approach (:func:`withdraw`) before it is
-    judged. From the opening on, the contacts are :func:`open_hand_contacts`'. The release succeeds when the object lies in the bin free of the fingers; one still
-    on them (wedged between the open pads) would leave with the hand. A higher release is not a
+    judged; from the opening on, the contacts are those of :func:`open_hand_contacts`. The
+    release succeeds when the object lies in the bin free of the fingers; one still on them
+    (wedged between the open pads) would leave with the hand. A higher release is not a
     failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
