@@ -23,7 +23,7 @@ BLAS and K-means run on one thread (the planner's timing target is for one core)
     .venv/bin/python bench/eval_planner_ycb.py [--seeds 0 1 2] [--objects mug banana] [-v]
     .venv/bin/python bench/eval_planner_ycb.py --objects all --per-object  # the 54 of HSQ_YCB_DIR
 
-``--objects`` takes names, or ``paper`` (the paper's 15, configs/assets.yaml download.objects,
+``--objects`` takes names, or ``paper`` (the paper's 15, ``hsqbench.experiment.config.YCB_OBJECTS``,
 the default), ``unseen`` (every other object of objects.csv) or ``all``. ``--per-object`` ends
 with one line per object (top grasps ok over its seeds, runs with grasps, failure names) and
 the totals over the paper's 15 and the others; ``--json PATH`` writes every run.
@@ -177,10 +177,10 @@ def check_grasp(grasp, truth: np.ndarray, plane: np.ndarray, gripper: GripperMod
 
 def object_names(choice: list[str] | None) -> list[str]:
     """Names for ``--objects``: ``paper``, ``unseen``, ``all`` or the names themselves."""
-    from hsqbench.assets.config import load_assets_config
     from hsqbench.assets.library import ycb_names
+    from hsqbench.experiment.config import YCB_OBJECTS
 
-    paper = [o.name for o in load_assets_config().download.objects]
+    paper = list(YCB_OBJECTS)
     if not choice or choice == ["paper"]:
         return paper
     if choice == ["all"]:
@@ -192,9 +192,9 @@ def object_names(choice: list[str] | None) -> list[str]:
 
 def per_object_report(rows: list[tuple], names: list[str]) -> None:
     """One line per object, then the totals over the paper's 15 and the others."""
-    from hsqbench.assets.config import load_assets_config
+    from hsqbench.experiment.config import YCB_OBJECTS
 
-    paper = {o.name for o in load_assets_config().download.objects}
+    paper = set(YCB_OBJECTS)
     totals: dict[str, list[int]] = {"paper": [0, 0, 0], "others": [0, 0, 0]}
     for name in names:
         mine = [r for r in rows if r[0] == name]
