@@ -37,8 +37,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from eval_planner_ycb import object_names, observe  # noqa: E402
 
+from hsqbench.experiment.machine import cpu_model  # noqa: E402
 from hsqbench.planner.api import PlanningContext  # noqa: E402
 from hsqbench.planner.registry import get_planner  # noqa: E402
+from hsqbench.settings import code_version  # noqa: E402
 
 #: The scene config of the unseen-object protocol's isolated attempts (resting poses).
 SCENE = "scene_resting"
@@ -124,6 +126,9 @@ def report(cpu: dict[str, float], stages: dict[str, list[float]], paper: set[str
     print("slowest: " + ", ".join(f"{k} {cpu[k]:.2f} s" for k in slowest))
     print("median stage wall s: " + ", ".join(f"{s} {np.median(v):.3f}" for s, v in stages.items()))
     print(f"target of issue 13: median <= {TARGET_S} s per isolated attempt on one core")
+    # The same code measured 0.16-0.185 s (unseen median) on one 2-core machine and 0.23 s on
+    # another: a figure means little without the CPU it ran on.
+    print(f"machine: {cpu_model()}, {os.cpu_count()} CPUs, code {code_version()}")
 
 
 def compare(grasps: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> int:
