@@ -36,9 +36,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from hsqbench.experiment.machine import cpu_model
 from hsqbench.planner.learned import network
 from hsqbench.planner.learned.config import load_contact_graspnet_config
 from hsqbench.planner.learned.contact_graspnet import plan_contact_graspnet
+from hsqbench.settings import code_version
 
 TOP = 10
 POSITION_TOL_MM = 5.0  # a grasp "the same" across devices: position ...
@@ -60,7 +62,8 @@ def machine() -> dict:
         "torch": torch.__version__,
         "torch_cuda": torch.version.cuda,
         "cuda_available": torch.cuda.is_available(),
-        "cpu": platform.processor() or platform.machine(),
+        "code": code_version(),
+        "cpu": cpu_model(),
         "threads": torch.get_num_threads(),
     }
     if torch.cuda.is_available():
