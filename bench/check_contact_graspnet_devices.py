@@ -6,8 +6,8 @@ support plane, camera positions) and seed, runs on every device in ``--devices``
 - the network alone (``network.run_network``): which input points its farthest point sampling
   picked, and for the contacts both devices picked, the largest difference in grasp position
   (mm), approach/closing axes (deg) and confidence;
-- the whole ``contact-graspnet-elim`` planner: its best grasp, and how many of its top 10 the
-  first device's top 10 contains (same position within 5 mm, axes within 10 deg);
+- the whole ``contact-graspnet-elim`` planner: how many of its top 10 grasps the first device's
+  top 10 contains (same position within 5 mm, axes within 10 deg);
 - the median planning time per call, after one warm-up call per device (CUDA start-up and the
   model load are not counted).
 
@@ -76,16 +76,16 @@ def machine() -> dict:
     return info
 
 
-def network_diff(cloud: np.ndarray, devices: list[str], seed: int, cfg) -> dict:
-    """The raw network outputs of each device against the first's (the cloud centred, as the
-    planner's world-centred input frame does)."""
+def network_diff(cloud: np.ndarray, cfgs: dict, seed: int) -> dict:
+    """The raw network outputs of each device (``cfgs``: label -> config) against the first's,
+    the cloud centred as the planner's world-centred input frame does."""
     cloud = cloud - cloud.mean(axis=0)
     outs = [
-        network.run_network(cloud, d.split("#")[0], seed, cfg.max_input_points, cfg.gripper_depth_m)
-        for d in devices
+        network.run_network(cloud, c.device, seed, c.max_input_points, c.gripper_depth_m)
+        for c in cfgs.values()
     ]
     ref, diffs = outs[0], {}
-    for device, out in zip(devices[1:], outs[1:], strict=True):
+    for device, out in zip(list(cfgs)[1:], outs[1:], strict=True):
         common, i, j = np.intersect1d(ref.input_index, out.input_index, return_indices=True)
         a, b = ref.poses[i], out.poses[j]
         diffs[device] = {
@@ -157,7 +157,9 @@ def main() -> int:
     # Labels: a device named twice (cpu cpu: a determinism check) is "cpu", "cpu#2".
     devices = [d if d not in resolved[:k] else f"{d}#{k + 1}" for k, d in enumerate(resolved)]
     base = dataclasses.replace(load_contact_graspnet_config(), eliminate=True)
-    cfgs = {d: dataclasses.replace(base, device=d.split("#")[0]) for d in devices}
+    cfgs = {
+        lab: dataclasses.replace(base, device=d) for lab, d in zip(devices, resolved, strict=True)
+    }
     info = machine()
     print(json.dumps(info))
     clouds = {}
@@ -176,7 +178,7 @@ def main() -> int:
             row = {
                 "cloud": name,
                 "seed": seed,
-                "network": network_diff(obs["points"], devices, seed, base),
+                "network": network_diff(obs["points"], cfgs, seed),
                 "top_agreement": {d: top_agreement(tops[devices[0]], tops[d]) for d in devices[1:]},
             }
             rows.append(row)
