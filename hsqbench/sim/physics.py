@@ -68,6 +68,9 @@ class PhysicsConfig:
         table: contact parameters of the table top and the bin.
         settle_time_s: simulated time given to a new scene to come to rest.
         settle_speed_mps: largest body speed (m/s, and rad/s for spins) that counts as at rest.
+        rest_checks: after ``settle_time_s``, how many times a scene still moving has its
+            objects stopped and let go (:func:`hsqbench.sim.scene.world.come_to_rest`).
+        rest_check_s: simulated time each let-go runs before the speed is checked again.
         object_mass_scale: every object's mass and inertia times this (1: the library's
             masses); for sweeps of how heavy the objects are.
     """
@@ -89,6 +92,8 @@ class PhysicsConfig:
     table: ContactConfig = field(default_factory=ContactConfig)
     settle_time_s: float = 1.0
     settle_speed_mps: float = 0.005
+    rest_checks: int = 50
+    rest_check_s: float = 0.1
     object_mass_scale: float = 1.0
 
     def __post_init__(self) -> None:
@@ -96,6 +101,11 @@ class PhysicsConfig:
             raise ValueError(f"timestep_s must be positive, got {self.timestep_s}")
         if self.impratio < 1:
             raise ValueError(f"impratio must be >= 1, got {self.impratio}")
+        if self.rest_checks < 0 or not self.rest_check_s > 0:
+            raise ValueError(
+                f"rest_checks must be >= 0 and rest_check_s > 0, got {self.rest_checks} and "
+                f"{self.rest_check_s}"
+            )
         if not self.object_mass_scale > 0:
             raise ValueError(f"object_mass_scale must be positive, got {self.object_mass_scale}")
 

@@ -10,12 +10,12 @@ import numpy as np
 from hsqbench.sim.physics import PhysicsConfig
 from hsqbench.sim.robot import Panda, RobotConfig
 from hsqbench.sim.scene.info import INITIAL_KEY, OBJECT_PREFIX
-from hsqbench.sim.scene.world import settle
+from hsqbench.sim.scene.world import come_to_rest
 
 
 @dataclass
 class Settled:
-    """The compiled scene at rest. ``settle_time_s`` / ``max_speed``: :func:`settle`'s answer."""
+    """The compiled scene at rest. ``settle_time_s`` / ``max_speed``: :func:`~hsqbench.sim.scene.world.come_to_rest`'s answer."""
 
     spec: mujoco.MjSpec
     model: mujoco.MjModel
@@ -40,7 +40,7 @@ def compile_settled(
     mujoco.mj_forward(model, data)
     bodies = {n: OBJECT_PREFIX + n for n in names}
     body_ids = {n: model.body(b).id for n, b in bodies.items()}
-    settle_s, speed = settle(model, data, np.array(list(body_ids.values())), physics)
+    settle_s, speed = come_to_rest(model, data, np.array(list(body_ids.values())), physics)
     key = model.key(INITIAL_KEY).id
     model.key_qpos[key] = data.qpos
     model.key_qvel[key] = 0.0
