@@ -18,6 +18,7 @@ from hsqbench.experiment.results import (
     rows_for,
 )
 from hsqbench.experiment.seeds import TrialSpec
+from hsqbench.sim.outcome import Attempt, Outcome, TrialResult
 from tests.fake_backend import FakeBackend
 
 ISO = TrialSpec("isolated", "hsq", 0, 2, ("mug",), 1234)
@@ -185,3 +186,38 @@ def test_backend_counting_an_object_both_cleared_and_lost_is_an_error() -> None:
     run = execute_trial(Twice(), PACKED)
     assert not run.ok and "must be distinct objects of the round" in run.error
     assert execute_trial(FakeBackend(), PACKED).ok
+
+
+def test_rows_carry_how_the_scene_settled() -> None:
+    """Every row of a trial (attempts and round) carries its scene's settling time and the
+    largest object speed when the cameras first looked; an errored trial leaves them empty."""
+    result = TrialResult("mug", 1234, "hsq", [Attempt(Outcome.SUCCESS, target="mug")])
+    result.scene_settle_s, result.scene_max_speed = 1.25, 0.0041
+    rows, _ = rows_for(TrialRun(ISO, result, None, 1.0, "w:1"), "h", "v")
+    assert (rows[0]["scene_settle_s"], rows[0]["scene_max_speed"]) == ("1.25", "0.0041")
+    packed = _run(PACKED)
+    packed.result.scene_settle_s, packed.result.scene_max_speed = 2.5, 0.2
+    rows, round_row = rows_for(packed, "h", "v")
+    assert {r["scene_max_speed"] for r in rows} == {"0.2"}
+    assert round_row["scene_settle_s"] == "2.5"
+    rows, round_row = rows_for(_run(PACKED, raise_on=("bowl",)), "h", "v")
+    assert rows[0]["scene_settle_s"] == "" and round_row["scene_max_speed"] == ""
+
+
+def test_a_run_of_an_earlier_version_is_read_but_not_appended_to(tmp_path) -> None:
+    """A results file written before the scene columns existed loads with them empty (reports
+    of committed runs keep working); appending to it is refused with the fix named."""
+    store = _store(tmp_path)
+    store.append(_run(ISO), "h", "v")
+    with open(store.attempts_path, newline="") as f:
+        table = list(csv.DictReader(f))
+    older = [c for c in ATTEMPT_COLUMNS if not c.startswith("scene_")]
+    with open(store.attempts_path, "w", newline="") as f:
+        writer = csv.DictWriter(f, older, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(table)
+    [row] = load_results(store.run_dir).attempts
+    assert row["scene_settle_s"] == "" and row["trial_key"] == ISO.key
+    again = ResultStore(store.run_dir)
+    with pytest.raises(ResultsError, match="use a new --run name"):
+        again.prepare()

@@ -194,6 +194,20 @@ def test_packed_round_stops_after_two_consecutive_failures(config):
     assert data["objects_presented"] == 2 and data["objects_cleared"] == []
 
 
+def test_a_trial_reports_how_its_scene_settled(config):
+    """Isolated trials and rounds carry their scene's settling (simulated time, largest object
+    speed once it ended), as the built scene measured it, into their records."""
+    result = run_isolated_trial("proc_box", 2, AbovePlanner(), config)
+    with TrialEnv.build("isolated", "proc_box", 2, config) as env:
+        settle_s, speed = env.info.settle_time_s, env.info.max_speed_after_settle
+    assert result.scene_settle_s == settle_s > 0.0
+    assert result.scene_max_speed == speed
+    assert result.to_dict()["scene_max_speed"] == speed
+    packed = run_packed_round(["proc_box", "proc_cylinder"], 4, AbovePlanner(), config)
+    assert packed.scene_settle_s > 0.0
+    assert 0.0 <= packed.to_dict()["scene_max_speed"] < 1.0
+
+
 def test_recorder_sees_every_stage_and_changes_nothing(config):
     plain = run_isolated_trial("proc_box", 2, AbovePlanner(), config)
     recorder = CountingRecorder()

@@ -43,6 +43,7 @@ from hsqbench.experiment.results import (
     STATUS_OK,
     load_results,
 )
+from hsqbench.experiment.settling import unsettled_note
 from hsqbench.experiment.stats import Rate, summarize_times
 
 TABLES_MD = "tables.md"
@@ -123,6 +124,8 @@ def load_run(run_dir: str | Path) -> RunData:
             "trial runner's stop rule (in a run older than the rounds' objects_lost column, an object "
             "taken out of the workspace also looks left)"
         )
+    if moving := unsettled_note(attempts, meta):
+        notes.append(moving)
     confidence = float(config.get("confidence", 0.95))
     backend = meta.get("backend", {}).get("backend")
     if backend == "sim":

@@ -46,6 +46,8 @@ ATTEMPT_COLUMNS = (
     "planning_s",
     "execution_s",
     "detail",
+    "scene_settle_s",
+    "scene_max_speed",
     "trial_wall_s",
     "worker",
     "config_hash",
@@ -72,6 +74,8 @@ ROUND_COLUMNS = (
     "n_success",
     "status",
     "detail",
+    "scene_settle_s",
+    "scene_max_speed",
     "trial_wall_s",
     "worker",
     "config_hash",
@@ -176,6 +180,9 @@ def rows_for(
         "config_hash": config_hash,
         "code_version": code_version,
         "finished_at": finished_at,
+        # The scene's settling (empty for an errored trial): the same on every row of a trial.
+        "scene_settle_s": getattr(run.result, "scene_settle_s", None),
+        "scene_max_speed": getattr(run.result, "scene_max_speed", None),
     }
     attempt_rows = [
         {c: _fmt(r.get(c)) for c in ATTEMPT_COLUMNS} for r in _attempt_records(run, common)

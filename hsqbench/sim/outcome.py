@@ -72,12 +72,19 @@ class Attempt:
 
 @dataclass
 class TrialResult:
-    """An isolated-object trial: one object, one attempt (the paper's protocol)."""
+    """An isolated-object trial: one object, one attempt (the paper's protocol).
+
+    ``scene_settle_s``, ``scene_max_speed``: the scene's settling before the cameras looked
+    (:class:`hsqbench.sim.scene.SceneInfo`'s ``settle_time_s`` and ``max_speed_after_settle``;
+    NaN when not known), so a run shows which presentations were still moving.
+    """
 
     object: str
     seed: int
     planner: str
     attempts: list[Attempt]
+    scene_settle_s: float = float("nan")
+    scene_max_speed: float = float("nan")
 
     @property
     def success(self) -> bool:
@@ -90,6 +97,8 @@ class TrialResult:
             "seed": self.seed,
             "planner": self.planner,
             "success": self.success,
+            "scene_settle_s": self.scene_settle_s,
+            "scene_max_speed": self.scene_max_speed,
             "attempts": [a.to_dict() for a in self.attempts],
         }
 
@@ -103,6 +112,7 @@ class RoundResult:
     ``objects_lost``: those taken out of the round without being cleared (out of the workspace:
     fallen off the table, or pushed or dropped out of the cameras' view; or still on the hand
     once it is back home).
+    ``scene_settle_s``, ``scene_max_speed``: as :class:`TrialResult`'s, for the round's scene.
     """
 
     objects: list[str]
@@ -112,6 +122,8 @@ class RoundResult:
     objects_cleared: list[str]
     objects_graspable: list[str] | None = None
     objects_lost: list[str] = field(default_factory=list)
+    scene_settle_s: float = float("nan")
+    scene_max_speed: float = float("nan")
 
     @property
     def objects_presented(self) -> int:
@@ -131,5 +143,7 @@ class RoundResult:
             "objects_cleared": list(self.objects_cleared),
             "objects_graspable": self.objects_graspable,
             "objects_lost": list(self.objects_lost),
+            "scene_settle_s": self.scene_settle_s,
+            "scene_max_speed": self.scene_max_speed,
             "attempts": [a.to_dict() for a in self.attempts],
         }

@@ -94,9 +94,17 @@ def run_isolated_trial(
         attempt, trace = run_attempt(env, plan, packed=False)
         trace.scene_build_s = env.info.build_time_s
         name = env.info.objects[0]
+        settle_s, speed = env.info.settle_time_s, env.info.max_speed_after_settle
     if traces is not None:
         traces.append(trace)
-    return TrialResult(object=name, seed=seed, planner=_planner_name(planner), attempts=[attempt])
+    return TrialResult(
+        object=name,
+        seed=seed,
+        planner=_planner_name(planner),
+        attempts=[attempt],
+        scene_settle_s=float(settle_s),
+        scene_max_speed=float(speed),
+    )
 
 
 def run_packed_round(
@@ -156,6 +164,7 @@ def run_packed_round(
             for name, why in lost.items():
                 attempt.detail += f"; {name} {why} (taken out, not cleared)"
         names = list(env.info.objects)
+        settle_s, speed = env.info.settle_time_s, env.info.max_speed_after_settle
     return RoundResult(
         objects=names,
         seed=seed,
@@ -164,4 +173,6 @@ def run_packed_round(
         objects_cleared=cleared,
         objects_graspable=graspable,
         objects_lost=lost_all,
+        scene_settle_s=float(settle_s),
+        scene_max_speed=float(speed),
     )
