@@ -619,3 +619,80 @@ def test_lowering_fractions_start_at_the_full_lowering_and_decrease():
     for bad in [(), (0.5,), (1.0, 0.5, 0.6), (1.0, 0.0)]:
         with pytest.raises(ValueError, match=r"lowering_fractions .* start at 1.0"):
             ExecutionConfig(lowering_fractions=bad)
+
+
+class SidePlanner:
+    """Horizontal grasps across the box's short side at 6 cm height, approaching along its long
+    side from either end: the hand holds it tilted 90 deg from pointing down."""
+
+    name = "side"
+
+    def plan(self, points, context) -> PlanResult:
+        p = np.asarray(points)
+        c = p.mean(axis=0)
+        xy = p[:, :2] - c[:2]
+        _, vectors = np.linalg.eigh(xy.T @ xy)  # ascending: the short horizontal side first
+        grasps = []
+        for sign in (1.0, -1.0):
+            a = sign * np.array([*vectors[:, 1], 0.0])
+            closing = np.array([*vectors[:, 0], 0.0])
+            rotation = np.column_stack([closing, np.cross(a, closing), a])
+            if np.linalg.det(rotation) < 0:
+                rotation[:, 0] *= -1
+            grasps.append(Grasp(np.array([*c[:2], 0.06]), rotation, 0.05, 0.9))
+        return PlanResult(grasps=grasps, planner=self.name)
+
+
+def test_rotation_toward_down_turns_the_approach_about_a_horizontal_axis():
+    """The turn is the smallest one: the whole fraction points the approach straight down, half
+    of it halves the tilt; the result is a rotation and the closing axis keeps its tilt
+    relative to the approach."""
+    from scipy.spatial.transform import Rotation
+
+    from hsqbench.sim.trial.execution import rotation_toward_down
+
+    for r in Rotation.random(20, random_state=3).as_matrix():
+        tilt = np.arccos(np.clip(-r[2, 2], -1, 1))
+        full = rotation_toward_down(r, 1.0)
+        np.testing.assert_allclose(full[:, 2], [0.0, 0.0, -1.0], atol=1e-9)
+        half = rotation_toward_down(r, 0.5)
+        assert np.arccos(np.clip(-half[2, 2], -1, 1)) == pytest.approx(tilt / 2, abs=1e-9)
+        for turned in (full, half):
+            np.testing.assert_allclose(turned.T @ turned, np.eye(3), atol=1e-9)
+            assert np.linalg.det(turned) == pytest.approx(1.0)
+            assert turned[:, 0] @ turned[:, 2] == pytest.approx(0.0, abs=1e-9)
+        np.testing.assert_allclose(rotation_toward_down(r, 0.0), r, atol=1e-12)
+    np.testing.assert_allclose(rotation_toward_down(TOP_DOWN, 1.0), TOP_DOWN)
+
+
+def test_a_tilted_hand_is_turned_to_point_down_before_it_lowers_the_object(config, monkeypatch):
+    """A side grasp is carried over the bin tilted as it was grasped; the hand then turns about
+    the TCP to point straight down before the lowering, so it opens pointing down and the
+    detail says so. With ``turn_down_fractions`` empty it opens as tilted as it grasped."""
+    opened = []
+    real_open = Stepper.open_hand
+
+    def spy(self, width):
+        opened.append(self.panda.tcp_pose(self.data)[1][:, 2])
+        return real_open(self, width)
+
+    monkeypatch.setattr(Stepper, "open_hand", spy)
+    [attempt] = run_isolated_trial("proc_box", 1, SidePlanner(), config).attempts
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    assert "(turned 100% of the way to pointing down)" in attempt.detail
+    assert opened[-1][2] < -0.99
+    untouched = replace(config, execution=replace(config.execution, turn_down_fractions=()))
+    [attempt] = run_isolated_trial("proc_box", 1, SidePlanner(), untouched).attempts
+    assert attempt.outcome == Outcome.SUCCESS, attempt.detail
+    assert "turned" not in attempt.detail
+    assert abs(opened[-1][2]) < 0.3
+
+
+def test_turn_down_fractions_decrease_within_the_whole_turn_or_are_empty():
+    from hsqbench.sim.trial.config import ExecutionConfig
+
+    for good in [(), (1.0,), (1.0, 0.5), (0.6, 0.3)]:
+        assert ExecutionConfig(turn_down_fractions=good).turn_down_fractions == good
+    for bad in [(1.2,), (0.5, 0.5), (0.5, 0.7), (1.0, 0.0), (-0.5,)]:
+        with pytest.raises(ValueError, match=r"turn_down_fractions .* decreasing values in"):
+            ExecutionConfig(turn_down_fractions=bad)

@@ -58,6 +58,9 @@ class ExecutionConfig:
         shift_min_level: below this horizontal part the hand points down and is not shifted.
         withdraw_m: how far the open hand is pulled back along its approach when the object
             is not in the bin after the release (tried shorter like the lowering).
+        turn_down_fractions: over the bin, a hand tilted more than ``shift_min_level`` is
+            turned about the TCP by the first of these fractions of the turn that would make it
+            point straight down that the arm can make (empty: no turn).
         resolve_restarts: IK restarts when a pose is re-solved during execution (the carry
             for the object's real position, the retreat): seeded by the plan, one suffices.
         park_xy_m: where removed objects are parked (x, y; object k at x + k), far outside
@@ -85,6 +88,7 @@ class ExecutionConfig:
     lowering_shifts_m: tuple[float, ...] = (0.03, 0.06)
     shift_min_level: float = 0.5
     withdraw_m: float = 0.08
+    turn_down_fractions: tuple[float, ...] = (1.0, 0.5)
     resolve_restarts: int = 1
     park_xy_m: tuple[float, float] = (10.0, 10.0)
 
@@ -103,6 +107,12 @@ class ExecutionConfig:
         if not 0.0 <= self.shift_min_level <= 1.0:
             raise ValueError(
                 f"execution.shift_min_level must be in [0, 1], got {self.shift_min_level}"
+            )
+        tf = self.turn_down_fractions
+        if any(not 0 < b < a for a, b in pairwise((1.0 + 1e-12, *tf))):
+            raise ValueError(
+                f"execution.turn_down_fractions {list(tf)}: decreasing values in (0, 1], or "
+                "empty (no turn)"
             )
         fr = self.lowering_fractions
         if not fr or fr[0] != 1.0 or any(not 0 < b < a for a, b in pairwise(fr)):

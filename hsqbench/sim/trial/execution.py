@@ -180,6 +180,47 @@ def _lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, f
     return waypoints, depth, shift, problem
 
 
+def rotation_toward_down(rotation: NDArray[np.float64], fraction: float) -> NDArray[np.float64]:
+    """``rotation`` (a TCP frame, approach in column 2) turned by ``fraction`` of the smallest
+    rotation that makes its approach point straight down (about the axis normal to both)."""
+    a, down = rotation[:, 2], np.array([0.0, 0.0, -1.0])
+    axis = np.cross(a, down)
+    s, c = float(np.linalg.norm(axis)), float(a @ down)
+    if s < 1e-9:
+        return rotation.copy()
+    k = axis / s
+    angle = fraction * float(np.arctan2(s, c))
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    turn = np.eye(3) + np.sin(angle) * kx + (1.0 - np.cos(angle)) * (kx @ kx)
+    return turn @ rotation
+
+
+def _turn_down(x: _Execution) -> str:
+    """Turn a tilted hand, holding the object over the bin, about the TCP toward pointing
+    straight down, by the first of ``execution.turn_down_fractions`` that the arm can make
+    clear of table and bin: the wrist then stands above the hand, not beside it at the bin
+    wall, so the lowering reaches the floor and the withdrawal rises against gravity (a cup
+    wall on a tilted finger rides up with it; on a vertical one it slides off). Returns the
+    detail's note ("" when the hand already points down or no turn could be made)."""
+    env, d, panda = x.env, x.env.data, x.env.panda
+    ex = env.config.execution
+    position, rotation = panda.tcp_pose(d)
+    if float(np.hypot(*rotation[:2, 2])) <= ex.shift_min_level or not ex.turn_down_fractions:
+        return ""
+    env.ik.sync(d)
+    here = panda.arm_q(d)
+    for f in ex.turn_down_fractions:
+        target = Pose(position, rotation_toward_down(rotation, f))
+        sol = env.ik.solve(target, here, env.rngs["ik"], restarts=ex.resolve_restarts)
+        if not sol.ok or sweep_problem(env, here, sol.q):
+            continue
+        note = f" (turned {f:.0%} of the way to pointing down)"
+        if reason := env.stepper.move_joints(sol.q, (x.hold,)):
+            note += f" (lost while turning: {reason})"
+        return note
+    return " (not turned: no turn toward pointing down reachable)"
+
+
 @contextmanager
 def open_hand_contacts(env: TrialEnv) -> Iterator[None]:
     """The solver's no-slip pass set to ``physics.open_hand_noslip_iterations`` while the open
@@ -224,7 +265,7 @@ def _release(x: _Execution) -> Verdict:
     failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
-    note = x.note
+    note = x.note + _turn_down(x)
     drop = probe.lowest_z(d, x.target) - (env.bin_box.lo[2] + cfg.execution.release_height_m)
     if drop > cfg.execution.min_lowering_m:
         waypoints, depth, shift, problem = _lowering(env, drop)
