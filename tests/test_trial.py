@@ -30,6 +30,7 @@ from hsqbench.sim.trial import (
     TrialConfig,
     TrialEnv,
     load_trial_config,
+    release,
     run_isolated_trial,
     run_packed_round,
 )
@@ -392,20 +393,23 @@ def test_post_grasp_motions_are_checked(config, monkeypatch):
     from hsqbench.sim.trial import execution
 
     sweep_problem = execution.sweep_problem
+
+    def check(fn):  # the carry's check is execution's, the lowering's the release's
+        for module in (execution, release):
+            monkeypatch.setattr(module, "sweep_problem", fn)
+
     problem = "link7 would come 1.0 mm from the table or bin at 50% of it"
     # The lowering (a line: more than two waypoints) fails the check: released from higher up.
-    monkeypatch.setattr(execution, "sweep_problem", lambda env, *w: problem if len(w) > 2 else "")
+    check(lambda env, *w: problem if len(w) > 2 else "")
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
     assert attempt.outcome == Outcome.SUCCESS, attempt.detail
     # (Here the line's IK already fails at the bin: the detail names that problem instead.)
-    assert (
-        attempt.detail.startswith("in the bin (released ") and "higher: lowering " in attempt.detail
-    )
+    assert attempt.detail.startswith("in the bin (") and "higher: lowering " in attempt.detail
     higher_all = float(re.search(r"released (\d+) cm higher", attempt.detail).group(1))
     # Unpatched, the full lowering meets the bin wall (link7) but a shorter one of
     # lowering_fractions is made: the box is released lower, and the detail names the full
     # one's problem.
-    monkeypatch.setattr(execution, "sweep_problem", sweep_problem)
+    check(sweep_problem)
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
     assert attempt.outcome == Outcome.SUCCESS, attempt.detail
     assert "higher: lowering " in attempt.detail
@@ -415,7 +419,7 @@ def test_post_grasp_motions_are_checked(config, monkeypatch):
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", only_full).attempts
     assert f"released {higher_all:.0f} cm higher" in attempt.detail
     # The carry (a joint-space move: two waypoints) fails it: unreachable, the box in the hand.
-    monkeypatch.setattr(execution, "sweep_problem", lambda env, *w: problem if len(w) == 2 else "")
+    check(lambda env, *w: problem if len(w) == 2 else "")
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
     assert attempt.outcome == Outcome.UNREACHABLE, attempt.detail
     assert attempt.detail == f"carry over the bin: {problem}"
@@ -453,7 +457,7 @@ def test_an_object_lost_while_lowered_into_the_bin_is_released_there(config, mon
     from hsqbench.sim.trial import execution
 
     lowering = {"started": False}
-    real_lowering = execution._lowering
+    real_lowering = execution.lowering
 
     def marked(env, drop):
         out = real_lowering(env, drop)
@@ -466,7 +470,7 @@ def test_an_object_lost_while_lowered_into_the_bin_is_released_there(config, mon
                 return "proc_box slipped 5.0 cm in the hand"
             return super().__call__()
 
-    monkeypatch.setattr(execution, "_lowering", marked)
+    monkeypatch.setattr(execution, "lowering", marked)
     monkeypatch.setattr(execution, "HoldWatch", SlipsWhenLowered)
     [attempt] = run_isolated_trial("proc_box", 1, "hsq", config).attempts
     assert lowering["started"]
@@ -536,7 +540,6 @@ def test_the_no_slip_pass_is_off_from_the_release_opening_and_set_back_after(con
     the hand opens over the bin with ``physics.open_hand_noslip_iterations``; the model keeps
     its own value for the next attempt, also when the release raises."""
     from hsqbench.sim.motion import Stepper
-    from hsqbench.sim.trial import execution
 
     seen = []
     for name in ("close_hand", "open_hand"):
@@ -553,7 +556,7 @@ def test_the_no_slip_pass_is_off_from_the_release_opening_and_set_back_after(con
     assert kept != opened
     assert ("close_hand", kept) in seen and seen[-1] == ("open_hand", opened)
     with TrialEnv.build("isolated", "proc_box", 1, config) as env:
-        with pytest.raises(RuntimeError), execution.open_hand_contacts(env):
+        with pytest.raises(RuntimeError), release.open_hand_contacts(env):
             assert env.model.opt.noslip_iterations == opened
             raise RuntimeError("a failed release")
         assert env.model.opt.noslip_iterations == kept
@@ -588,21 +591,19 @@ def test_a_blocked_lowering_is_tried_away_from_a_sideways_wrist_before_a_shorter
     points down is never moved."""
     from types import SimpleNamespace
 
-    from hsqbench.sim.trial import execution
-
     tried = []
 
     def first_clear(env, offsets):
         tried[:] = offsets
         return np.zeros((2, 7)), len(offsets) - 2, "link7 1.0 mm from the table or bin"
 
-    monkeypatch.setattr(execution, "_first_clear_line", first_clear)
+    monkeypatch.setattr(release, "first_clear_line", first_clear)
     ex = config.execution
     sideways = np.column_stack([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # points +x
     for rotation, shifts in ((sideways, (0.0, *ex.lowering_shifts_m)), (TOP_DOWN, (0.0,))):
         panda = SimpleNamespace(tcp_pose=lambda data, r=rotation: (np.zeros(3), r))
         env = SimpleNamespace(config=config, panda=panda, data=None)
-        _, depth, shift, problem = execution._lowering(env, 0.2)
+        _, depth, shift, problem = release.lowering(env, 0.2)
         expected = [[s, 0.0, -f * 0.2] for f in ex.lowering_fractions for s in shifts]
         np.testing.assert_allclose(np.array(tried), expected, atol=1e-12)
         assert (depth, shift) == pytest.approx((-expected[-2][2], expected[-2][0]))
@@ -649,7 +650,7 @@ def test_rotation_toward_down_turns_the_approach_about_a_horizontal_axis():
     relative to the approach."""
     from scipy.spatial.transform import Rotation
 
-    from hsqbench.sim.trial.execution import rotation_toward_down
+    from hsqbench.sim.trial.release import rotation_toward_down
 
     for r in Rotation.random(20, random_state=3).as_matrix():
         tilt = np.arccos(np.clip(-r[2, 2], -1, 1))

@@ -63,7 +63,7 @@ class PhysicsConfig:
         tolerance: main solver tolerance.
         noslip_iterations: post-solve iterations that remove residual slip (0 = off).
         open_hand_noslip_iterations: the same once the hand has opened to release an object,
-            until it is home (:func:`hsqbench.sim.trial.execution.open_hand_contacts`).
+            until it is home (:func:`hsqbench.sim.trial.release.open_hand_contacts`).
         objects: contact parameters of object collision hulls.
         table: contact parameters of the table top and the bin.
         settle_time_s: simulated time given to a new scene to come to rest.

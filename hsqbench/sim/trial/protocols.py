@@ -14,7 +14,7 @@ from hsqbench.sim.recorder import Recorder
 from hsqbench.sim.trial.attempt import AttemptTrace, resolve_planner, run_attempt
 from hsqbench.sim.trial.config import TrialConfig, load_trial_config
 from hsqbench.sim.trial.env import TrialEnv
-from hsqbench.sim.trial.execution import open_hand_contacts, withdraw
+from hsqbench.sim.trial.release import open_hand_contacts, withdraw
 
 
 def _return_home(env: TrialEnv) -> None:
