@@ -129,16 +129,16 @@ def _carry(x: _Execution) -> Verdict:
 
 
 def _release(x: _Execution) -> Verdict:
-    """Lower the object toward the bin floor on a checked line, open, and judge where it came to
-    rest. A lowering that cannot be solved or would sweep the arm into the bin is tried moved
-    away from the wrist, then shorter (:func:`~hsqbench.sim.trial.release.lowering`); when none can be run the hand opens
+    """Turn a tilted hand toward pointing down, lower the object toward the bin floor on a
+    checked line, open, and judge where it came to rest (the steps: :mod:`release
+    <hsqbench.sim.trial.release>`). A lowering that cannot be solved or would sweep the arm into
+    the bin is tried moved away from the wrist, then shorter; when none can be run the hand opens
     where it is, over the bin. An object that slips or leaves a finger during the lowering is
     released there. An object not in the bin once the hand is open, or still touching a finger,
-    may hang on one: the hand is withdrawn along its approach (:func:`~hsqbench.sim.trial.release.withdraw`) before it is
-    judged; from the opening on, the contacts are those of :func:`open_hand_contacts`. The
-    release succeeds when the object lies in the bin free of the fingers; one still on them
-    (wedged between the open pads) would leave with the hand. A higher release is not a
-    failure; the detail says so."""
+    may hang on one: the hand is withdrawn along its approach before it is judged; from the
+    opening on, the contacts are those of ``open_hand_contacts``. The release succeeds when the
+    object lies in the bin free of the fingers; one still on them (wedged between the open pads)
+    would leave with the hand. A higher release is not a failure; the detail says so."""
     env, d, probe = x.env, x.env.data, x.env.probe
     cfg = env.config
     note = x.note + turn_down(env, (x.hold,))
