@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from hsqbench.sim.ik import Pose
 from hsqbench.sim.motion import JointTrajectory, Watch, joint_move_duration, line_duration
+from hsqbench.sim.sensor_noise import rotation_about
 from hsqbench.sim.trial.env import TrialEnv
 from hsqbench.sim.trial.planning import sweep_problem
 
@@ -61,9 +62,7 @@ def lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, fl
     toward where the hand points (horizontally): a wrist turned sideways is then drawn away from
     the bin wall behind it. ``(waypoints, depth, shift, problem)`` as :func:`first_clear_line`."""
     ex = env.config.execution
-    approach = env.panda.tcp_pose(env.data)[1][:, 2]
-    level = np.array([approach[0], approach[1], 0.0])
-    norm = float(np.linalg.norm(level))
+    level, norm = _level(env.panda.tcp_pose(env.data)[1])
     shifts = (0.0, *ex.lowering_shifts_m) if norm > ex.shift_min_level else (0.0,)
     plan = [(f * drop, s) for f in ex.lowering_fractions for s in shifts]
     down = np.array([0.0, 0.0, -1.0])
@@ -71,6 +70,13 @@ def lowering(env: TrialEnv, drop: float) -> tuple[NDArray[np.float64] | None, fl
     waypoints, k, problem = first_clear_line(env, offsets)
     depth, shift = plan[k] if waypoints is not None else (0.0, 0.0)
     return waypoints, depth, shift, problem
+
+
+def _level(rotation: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
+    """The horizontal part of a TCP frame's approach axis and its length: above
+    ``execution.shift_min_level`` the hand is tilted enough for its wrist to stand beside it."""
+    level = np.array([rotation[0, 2], rotation[1, 2], 0.0])
+    return level, float(np.linalg.norm(level))
 
 
 def rotation_toward_down(rotation: NDArray[np.float64], fraction: float) -> NDArray[np.float64]:
@@ -81,11 +87,7 @@ def rotation_toward_down(rotation: NDArray[np.float64], fraction: float) -> NDAr
     s, c = float(np.linalg.norm(axis)), float(a @ down)
     if s < 1e-9:
         return rotation.copy()
-    k = axis / s
-    angle = fraction * float(np.arctan2(s, c))
-    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    turn = np.eye(3) + np.sin(angle) * kx + (1.0 - np.cos(angle)) * (kx @ kx)
-    return turn @ rotation
+    return rotation_about(axis / s, fraction * float(np.arctan2(s, c))) @ rotation
 
 
 def turn_down(env: TrialEnv, watches: tuple[Watch, ...]) -> str:
@@ -94,11 +96,12 @@ def turn_down(env: TrialEnv, watches: tuple[Watch, ...]) -> str:
     clear of table and bin: the wrist then stands above the hand, not beside it at the bin
     wall, so the lowering reaches the floor and the withdrawal rises against gravity (a cup
     wall on a tilted finger rides up with it; on a vertical one it slides off). The move is
-    watched by ``watches``. Returns the detail's note: "" when the hand already points down."""
+    watched by ``watches``. Returns the detail's note: "" when the hand already points down or
+    ``turn_down_fractions`` is empty."""
     d, panda = env.data, env.panda
     ex = env.config.execution
     position, rotation = panda.tcp_pose(d)
-    if float(np.hypot(*rotation[:2, 2])) <= ex.shift_min_level or not ex.turn_down_fractions:
+    if _level(rotation)[1] <= ex.shift_min_level or not ex.turn_down_fractions:
         return ""
     env.ik.sync(d)
     here = panda.arm_q(d)
