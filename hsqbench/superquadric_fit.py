@@ -26,12 +26,18 @@ def _fit_inputs(points: ArrayLike, d_th: float | None = None) -> NDArray[np.floa
     return cloud
 
 
+def _tree(points: NDArray) -> cKDTree:
+    """KD-tree split at the midpoints of cells: quicker to build than the median-split default,
+    and exact queries find the same neighbours."""
+    return cKDTree(points, balanced_tree=False)
+
+
 def _alpha(cloud: NDArray, samples: NDArray) -> float:
-    return float(np.mean(cKDTree(samples).query(cloud)[0]))
+    return float(np.mean(_tree(samples).query(cloud)[0]))
 
 
 def _beta(cloud: NDArray, samples: NDArray, d_th: float) -> float:
-    near = cKDTree(cloud).query(samples, distance_upper_bound=d_th)[0]
+    near = _tree(cloud).query(samples, distance_upper_bound=d_th)[0]
     return float(np.count_nonzero(np.isfinite(near)) / samples.shape[0])
 
 
