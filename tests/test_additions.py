@@ -32,6 +32,7 @@ from tests.shapes import (
     superquadric_cloud,
     union_cloud,
 )
+from tests.test_api import CAMERAS, seen
 from tests.test_baselines import two_boxes_apart
 from tests.test_elimination import GRIPPER, ROLLS, one_line, patch, reasons, two_faces
 from tests.test_table_lines import lying_bar
@@ -181,6 +182,16 @@ def case_hidden_bodies(cfg: PlannerConfig):
 
 
 #: name -> (case, check(with, without)).
+
+
+def case_redraw(cfg: PlannerConfig):
+    # A 10 cm cube, wider than the opening every way: no grasp on any draw, so the reason
+    # says how many draws were made.
+    points = seen([Box((0.05, 0.05, 0.05), center=np.array([0.0, 0.0, 0.05]))])
+    context = PlanningContext(support_plane=TABLE, seed=0, camera_positions=CAMERAS)
+    return HSQPlanner(cfg).plan(points, context).reason
+
+
 CASES = {
     "thinning": (case_thinning, lambda on, off: on < 0.25 and off == 1.0),
     "outlier_removal": (case_outlier_removal, lambda on, off: on == 1 and off == 0),
@@ -202,6 +213,7 @@ CASES = {
     "unseen_waiver": (case_unseen_waiver, lambda on, off: on == {""} and off == {"support"}),
     "sweep": (case_sweep, lambda on, off: on == {"sweep"} and off == {""}),
     "hidden_bodies": (case_hidden_bodies, lambda on, off: on == {"hidden"} and off == {""}),
+    "redraw": (case_redraw, lambda on, off: "on each of 3 draws" in on and "draws" not in off),
 }
 
 

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from hsqbench.config import ConfigError, from_dict
 from hsqbench.planner import plan_grasps
 from hsqbench.planner.api import (
     HSQPlanner,
@@ -15,7 +17,9 @@ from hsqbench.planner.api import (
     PlanningContext,
     PlanResult,
     plan_from_hidden,
+    redraw_seed,
 )
+from hsqbench.planner.config import PlannerConfig
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.registry import get_planner, planner_names, register_planner
 from hsqbench.superquadric import Superquadric, alpha_beta
@@ -342,3 +346,53 @@ def test_every_cloud_planner_goes_through_the_one_front_door() -> None:
         assert r.reason == results[0].reason and r.reason
     with pytest.raises(ValueError, match="NaN"):
         SingleSQPlanner().plan(np.full((4, 3), np.nan), context)
+
+
+def test_redraw_seeds_are_reproducible_and_distinct() -> None:
+    assert redraw_seed(7, 0) == 7 and redraw_seed(None, 0) is None
+    seeds = [redraw_seed(7, k) for k in (1, 2, 3)]
+    assert seeds == [redraw_seed(7, k) for k in (1, 2, 3)]
+    assert len({7, *seeds, redraw_seed(8, 1), redraw_seed(None, 1)}) == 6
+
+
+@pytest.mark.parametrize(
+    ("redraws", "grasps_on_draw", "draws"), [(2, 0, 1), (2, 1, 2), (2, 9, 3), (0, 1, 1)]
+)
+def test_no_grasp_redraws_stage_one_until_a_grasp_survives(
+    monkeypatch, redraws: int, grasps_on_draw: int, draws: int
+) -> None:
+    import hsqbench.planner.api as api
+
+    planner = HSQPlanner()
+    planner.config = dataclasses.replace(
+        planner.config,
+        recovery=dataclasses.replace(planner.config.recovery, no_grasp_redraws=redraws),
+    )
+    seeds: list[int | None] = []
+
+    def recover(cloud, groups, clean, seed):
+        seeds.append(seed)
+        return []
+
+    def stage_two(cloud, hidden, config, gripper, context):
+        found = len(seeds) - 1 == grasps_on_draw
+        assert context.seed == seeds[-1]  # stage two plans with the draw's seed too
+        return PlanResult(grasps=["a grasp"] if found else [], reason="" if found else "none")
+
+    monkeypatch.setattr(planner, "_recover", recover)
+    monkeypatch.setattr(api, "plan_in_context", stage_two)
+    cloud = np.random.default_rng(0).normal(scale=0.01, size=(3000, 3))
+    result = planner.plan(cloud, PlanningContext(seed=5))
+    assert seeds == [redraw_seed(5, k) for k in range(draws)]
+    assert bool(result.grasps) == (grasps_on_draw < draws)
+    assert result.reason == (
+        ""
+        if result.grasps
+        else "none" + f" (on each of {draws} draws of stage one's K-means parts)" * (draws > 1)
+    )
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "2"])
+def test_no_grasp_redraws_must_be_a_whole_number(bad) -> None:
+    with pytest.raises(ConfigError, match="no_grasp_redraws"):
+        from_dict(PlannerConfig, {"recovery": {"no_grasp_redraws": bad}})

@@ -30,7 +30,8 @@ class Addition:
     superseded_by: str | None = None
 
 
-#: Name -> the addition. The order is the planner's order (cleaning, stage one, stage two).
+#: Name -> the addition. The order is the planner's order (cleaning, stage one, stage two, then
+#: the retry of both).
 ADDITIONS: dict[str, Addition] = {
     "thinning": Addition(
         "cleaning",
@@ -134,6 +135,11 @@ ADDITIONS: dict[str, Addition] = {
         {"body_rule": False},
         "the hand must not enter the hidden superquadrics where no camera saw free space",
     ),
+    "redraw": Addition(
+        "recovery",
+        {"no_grasp_redraws": 0},
+        "when no grasp survives, both stages run again on new K-means parts (twice at most)",
+    ),
 }
 
 
@@ -161,6 +167,7 @@ class AdditionsConfig:
     unseen_waiver: bool = True
     sweep: bool = True
     hidden_bodies: bool = True
+    redraw: bool = True
 
     def __post_init__(self) -> None:
         for name in self.names():

@@ -405,10 +405,13 @@ class HSQPlanner(PlannerBase):
 
     def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
         """Stage one (hidden superquadrics) on the cleaned cloud, or on each object of a packed
-        scene (``recovery.split_objects``), then stage two on the whole cloud."""
-        from hsqbench.planner.recovery import recover_hidden_superquadrics
+        scene (``recovery.split_objects``), then stage two on the whole cloud.
 
-        start_recovery = time.perf_counter()
+        Stage one's K-means parts are a random draw. When no candidate survives stage two, both
+        stages run again on a fresh draw (:func:`redraw_seed`), ``recovery.no_grasp_redraws``
+        times at most: where the rules leave a handful of closing lines, another split of the
+        cloud into parts often yields the superquadric whose lines survive. A cloud that has
+        grasps on the first draw costs no more."""
         rcfg = self.config.recovery
         cloud = clean.points
         # A packed scene is split into objects, each recovered as an isolated one; a cloud
@@ -416,15 +419,39 @@ class HSQPlanner(PlannerBase):
         groups = object_clusters(cloud, rcfg) if context.packed and rcfg.split_objects else []
         if not groups:
             groups = [np.arange(cloud.shape[0])]
+        recovery_s = 0.0
+        for draw in range(rcfg.no_grasp_redraws + 1):
+            draw_context = dataclasses.replace(context, seed=redraw_seed(context.seed, draw))
+            start = time.perf_counter()
+            hidden = self._recover(cloud, groups, clean, draw_context.seed)
+            recovery_s += time.perf_counter() - start
+            result = plan_in_context(cloud, hidden, self.config.grasp, self.gripper, draw_context)
+            if result.grasps:
+                break
+        if draw > 0 and not result.grasps:
+            result.reason += f" (on each of {draw + 1} draws of stage one's K-means parts)"
+        result.timings = {"recovery": recovery_s, **result.timings}
+        return result
+
+    def _recover(
+        self, cloud: NDArray, groups: list[NDArray], clean: CleanInput, seed: int | None
+    ) -> list[Any]:
+        """Stage one on each group of ``cloud``; inliers index the caller's cloud."""
+        from hsqbench.planner.recovery import recover_hidden_superquadrics
+
+        rcfg = self.config.recovery
         # A loop over objects (at most a handful), each recovery vectorised over its points.
         hidden = [
             dataclasses.replace(h, inliers=group[h.inliers])
             for group in groups
-            for h in recover_hidden_superquadrics(cloud[group], rcfg, seed=context.seed)
+            for h in recover_hidden_superquadrics(cloud[group], rcfg, seed=seed)
         ]
-        # Inliers index the caller's cloud, not the cleaned one.
-        hidden = [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in hidden]
-        t_recovery = time.perf_counter() - start_recovery
-        result = plan_in_context(cloud, hidden, self.config.grasp, self.gripper, context)
-        result.timings = {"recovery": t_recovery, **result.timings}
-        return result
+        return [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in hidden]
+
+
+def redraw_seed(seed: int | None, draw: int) -> int | None:
+    """The planner seed of draw ``draw`` (0: ``seed`` itself) of :meth:`HSQPlanner.stages`:
+    later draws get independent seeds derived from ``seed`` and the draw's number."""
+    if draw == 0:
+        return seed
+    return int(np.random.SeedSequence([0 if seed is None else seed, draw]).generate_state(1)[0])

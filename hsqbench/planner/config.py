@@ -39,6 +39,7 @@ class RecoveryConfig:
     max_parts: int = 32
     kmeans_n_init: int = 1
     duplicate_iou: float = 0.8
+    no_grasp_redraws: int = 2
     # Probabilistic model.
     outlier_weight: float = 0.2
     hidden_outlier_weight: float = 0.9
@@ -88,6 +89,13 @@ class RecoveryConfig:
             raise ValueError(f"need 0 < eps_min < eps_max <= 2, got {self.eps_min}, {self.eps_max}")
         if self.max_surface_samples < 100:
             raise ValueError(f"max_surface_samples must be >= 100, got {self.max_surface_samples}")
+        if isinstance(self.no_grasp_redraws, bool) or not (
+            isinstance(self.no_grasp_redraws, int) and self.no_grasp_redraws >= 0
+        ):
+            raise ValueError(
+                f"no_grasp_redraws must be a whole number >= 0 (0: no redraw), got "
+                f"{self.no_grasp_redraws!r}"
+            )
         if self.max_fit_points < 11 or self.max_parts < 1 or self.em_max_iterations < 1:
             raise ValueError("max_fit_points >= 11, max_parts >= 1, em_max_iterations >= 1")
         if not 0.0 <= self.hidden_sigma_decay < 1.0:
