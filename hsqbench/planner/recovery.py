@@ -265,13 +265,15 @@ def _duplicate_test(
     """True when the inliers of a running fit overlap those of a finished one by ``min_iou``."""
     if not done:
         return None
-    stack = np.array(done)
+    # 0/1 rows: the counts are one exact matrix-vector product instead of two boolean passes
+    stack = np.array(done, dtype=np.float64)
+    sizes = stack.sum(axis=1)
 
     def test(posterior: Array) -> bool:
-        mask = posterior > threshold
-        inter = np.count_nonzero(stack & mask, axis=1)
-        union = np.count_nonzero(stack | mask, axis=1)
-        return bool(np.any(inter >= min_iou * np.maximum(union, 1)))
+        mask = (posterior > threshold).astype(np.float64)
+        inter = stack @ mask
+        union = sizes + mask.sum() - inter
+        return bool(np.any(inter >= min_iou * np.maximum(union, 1.0)))
 
     return test
 
@@ -362,7 +364,9 @@ def recover_hidden_superquadrics(
             continue
         done.append(inlier_voxels)
         sq = res.state.to_superquadric()
-        y = sensor.points[np.unique(sensor.inverse[inliers])]
+        sensed = np.zeros(len(sensor.points), dtype=bool)  # the sensor voxels of Y, in order
+        sensed[sensor.inverse[inliers]] = True
+        y = sensor.points[sensed]
         alpha, beta = fit_measures(y, sq, cfg)
         results.append(HiddenSuperquadric(sq, inliers, alpha, beta, index, res.sigma_m, res.cost))
     return results

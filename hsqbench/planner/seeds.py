@@ -14,10 +14,12 @@ seed starts inside the part and grows.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 from numpy.typing import NDArray
 from sklearn.cluster import KMeans
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from hsqbench.planner.radial import SQState
 
@@ -45,6 +47,12 @@ def inertia_ellipsoid(points: Array, scale_min_m: float, scale_max_m: float) -> 
     return SQState(1.0, 1.0, scale, axes, centre)
 
 
+@cache
+def _thread_pools() -> ThreadpoolController:
+    """The process's BLAS and OpenMP pools, looked up once (a lookup costs about 2 ms)."""
+    return ThreadpoolController()
+
+
 def kmeans_labels(points: Array, k: int, seed: int, n_init: int) -> NDArray[np.int64]:
     """K-means labels (N,) with a fixed seed; ``k`` is capped by the number of distinct points.
 
@@ -56,5 +64,5 @@ def kmeans_labels(points: Array, k: int, seed: int, n_init: int) -> NDArray[np.i
     if k <= 1:
         return np.zeros(len(points), dtype=np.int64)
     km = KMeans(n_clusters=k, n_init=n_init, random_state=seed)
-    with threadpool_limits(limits=1):
+    with _thread_pools().limit(limits=1):
         return km.fit_predict(points).astype(np.int64)
