@@ -41,14 +41,24 @@ weights ``c_i``, the number of input points a voxel centroid stands for.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.linalg import _umath_linalg
 from numpy.typing import NDArray
 
 from hsqbench.planner.config import RecoveryConfig
-from hsqbench.planner.radial import Evaluation, SQState, apply_increment, evaluate, jacobian
+from hsqbench.planner.radial import (
+    Evaluation,
+    SQState,
+    apply_increment,
+    complete,
+    evaluate,
+    jacobian,
+    partial_evaluate,
+)
 
 Array = NDArray[np.float64]
 
@@ -57,7 +67,7 @@ _LOG_2PI = float(np.log(2.0 * np.pi))
 _LOG_ODDS_MAX = 700.0
 #: Largest change of a log-scale in one LM step; keeps exp() finite on a wild step.
 _MAX_LOG_STEP = 2.0
-_DIAG = np.arange(11)
+_N_PARAMS = 11
 #: Levenberg-Marquardt damping: start, bounds, and the factors on success and failure.
 _LAMBDA = (1e-2, 1e-7, 1e7, 0.3, 10.0)
 
@@ -76,20 +86,27 @@ class MixtureModel:
             np.log(w) - np.log(self.volume_m3) - np.log1p(-w) + 1.5 * (_LOG_2PI + np.log(sigma2))
         )
 
-    def _odds(self, d: Array, sigma2: float) -> Array:
+    def odds(self, d: Array, sigma2: float) -> Array:
         """Inlier-to-outlier density ratio of each point, ``exp(-ln k - d² / 2 sigma²)``."""
         return np.exp(np.minimum(-self.log_k(sigma2) - d * d / (2.0 * sigma2), _LOG_ODDS_MAX))
 
     def posterior(self, d: Array, sigma2: float) -> Array:
         """Inlier posterior of each point (N,)."""
-        odds = self._odds(d, sigma2)
-        return odds / (1.0 + odds)
+        return _posterior(self.odds(d, sigma2))
 
     def nll(self, d: Array, sigma2: float, weights: Array) -> float:
         """Negative log-likelihood per point (nats), each point counted ``weights`` times:
         ``-log(w_o / V) - log(1 + odds)`` averaged."""
+        return self.nll_of_odds(self.odds(d, sigma2), weights)
+
+    def nll_of_odds(self, odds: Array, weights: Array) -> float:
+        """:meth:`nll` from the points' :meth:`odds`."""
         log_out = np.log(self.outlier_weight) - np.log(self.volume_m3)
-        return float(-log_out - weights @ np.log1p(self._odds(d, sigma2)) / weights.sum())
+        return float(-log_out - weights @ np.log1p(odds) / weights.sum())
+
+
+def _posterior(odds: Array) -> Array:
+    return odds / (1.0 + odds)
 
 
 @dataclass
@@ -117,12 +134,17 @@ class EMSResult:
 
 @dataclass
 class _Point:
-    """Where EM stands: state, its evaluation, sigma² and cost."""
+    """Where EM stands: state, its evaluation, sigma², cost, and the odds behind the cost (kept
+    for the next E-step's posterior, which needs the same exponentials)."""
 
     state: SQState
     ev: Evaluation
     sigma2: float
     cost: float
+    odds: Array
+
+    def posterior(self) -> Array:
+        return _posterior(self.odds)
 
 
 class _Fitter:
@@ -160,8 +182,11 @@ class _Fitter:
         return max(sigma2, self.sigma2_min)
 
     def _at(self, state: SQState, sigma2: float) -> _Point:
-        ev = evaluate(self.points_t, state)
-        return _Point(state, ev, sigma2, self.model.nll(ev.d, sigma2, self.weights))
+        return self._point(state, evaluate(self.points_t, state), sigma2)
+
+    def _point(self, state: SQState, ev: Evaluation, sigma2: float) -> _Point:
+        odds = self.model.odds(ev.d, sigma2)
+        return _Point(state, ev, sigma2, self.model.nll_of_odds(odds, self.weights), odds)
 
     def _m_step(
         self, state: SQState, ev: Evaluation, w: Array, lam: float, steps: int
@@ -181,24 +206,26 @@ class _Fitter:
                 jac = jacobian(ev)
                 wj = jac * wc
                 h = wj @ jac.T
-                g = wj @ ev.r
+                minus_g = -(wj @ ev.r)  # solving for -g gives the step itself, exactly
                 diag = h.diagonal().copy()
                 np.maximum(diag, 1e-12 * max(float(diag.max()), 1e-300), out=diag)
             damped = h.copy()
-            damped[_DIAG, _DIAG] += lam * diag
-            try:
-                delta = -np.linalg.solve(damped, g)
-            except np.linalg.LinAlgError:
-                fresh = False
-                lam = min(lam * _LAMBDA[4], _LAMBDA[2])
-                continue
-            delta[2:5] = np.clip(delta[2:5], -_MAX_LOG_STEP, _MAX_LOG_STEP)
+            damped_diag = damped.reshape(-1)[:: _N_PARAMS + 1]  # a view
+            damped_diag += lam * diag
+            # np.linalg.solve's own gufunc: its wrapper's checks and error-state context cost
+            # more than the 11 x 11 solve. Where the wrapper raises LinAlgError (a singular
+            # system) this gives NaN, and the NaN step fails the cost test below just the same.
+            delta = _umath_linalg.solve1(damped, minus_g)
+            log_steps = delta[2:5]  # clipped in place (np.clip costs more on 3 numbers)
+            np.minimum(
+                np.maximum(log_steps, -_MAX_LOG_STEP, out=log_steps), _MAX_LOG_STEP, out=log_steps
+            )
             trial = apply_increment(state, delta, self.eps_bounds, self.scale_bounds)
-            trial_ev = evaluate(self.points_t, trial)
-            trial_cost = float(wc @ (trial_ev.r * trial_ev.r))
-            fresh = bool(np.isfinite(trial_cost) and trial_cost < cost)
+            part = partial_evaluate(self.points_t, trial)  # completed only if accepted
+            trial_cost = float(wc @ (part.r * part.r))
+            fresh = math.isfinite(trial_cost) and trial_cost < cost
             if fresh:
-                state, ev, cost = trial, trial_ev, trial_cost
+                state, ev, cost = trial, complete(part), trial_cost
                 lam = max(lam * _LAMBDA[3], _LAMBDA[1])
             else:
                 lam = min(lam * _LAMBDA[4], _LAMBDA[2])
@@ -208,20 +235,19 @@ class _Fitter:
         """EM until the cost falls by less than ``tolerance`` in one iteration, or ``max_iter``."""
         lam = _LAMBDA[0]
         for _ in range(max_iter):
-            p = self.model.posterior(at.ev.d, at.sigma2)
+            p = at.posterior()
             if self.stop is not None and self.stop(p):
                 self.stopped = True
                 break
             w = self.weights * p
             state, ev, lam = self._m_step(at.state, at.ev, w, lam, self.cfg.lm_steps)
-            sigma2 = self._sigma2(ev, w, at.sigma2)
-            cost = self.model.nll(ev.d, sigma2, self.weights)
+            new = self._point(state, ev, self._sigma2(ev, w, at.sigma2))
             self.iterations += 1
-            if not np.isfinite(cost):
+            if not np.isfinite(new.cost):
                 break
-            improved = at.cost - cost
-            if cost < at.cost:
-                at = _Point(state, ev, sigma2, cost)
+            improved = at.cost - new.cost
+            if new.cost < at.cost:
+                at = new
             if improved < tolerance:
                 break
         return at
@@ -259,7 +285,7 @@ class _Fitter:
         ``switch_iterations`` LM steps each, and the best of those replaces ``at`` if it lowers
         ``sum w d²`` by more than the fraction ``switch_gain``.
         """
-        w = self.weights * self.model.posterior(at.ev.d, at.sigma2)
+        w = self.weights * at.posterior()
         current = float(w @ (at.ev.d * at.ev.d))
         scored = []
         for cand in self.candidates(at.state):
@@ -276,8 +302,7 @@ class _Fitter:
         if best is None or best[0] > (1.0 - self.cfg.switch_gain) * current:
             return None
         _, state, ev = best
-        sigma2 = self._sigma2(ev, w, at.sigma2)
-        return _Point(state, ev, sigma2, self.model.nll(ev.d, sigma2, self.weights))
+        return self._point(state, ev, self._sigma2(ev, w, at.sigma2))
 
     # ------------------------------------------------------------------ driver
     def fit(self, init: SQState, sigma2: float, max_switches: int) -> EMSResult:
@@ -293,10 +318,9 @@ class _Fitter:
                 switches += 1
         if not self.stopped:
             at = self._run(at, self.cfg.em_max_iterations, self.cfg.em_tolerance)
-        posterior = self.model.posterior(at.ev.d, at.sigma2)
         return EMSResult(
             at.state,
-            posterior,
+            at.posterior(),
             float(np.sqrt(at.sigma2)),
             at.cost,
             self.iterations,

@@ -49,6 +49,7 @@ Array = NDArray[np.float64]
 _RHO_MIN = 1e-12
 #: Floor of ratios before a logarithm.
 _TINY = 1e-300
+_EYE3 = np.eye(3)
 
 
 @dataclass
@@ -79,6 +80,29 @@ class SQState:
 
 
 @dataclass
+class PartialEvaluation:
+    """The signed radial distance ``r`` at a state, with the intermediate results that
+    :func:`complete` turns into the rest of an :class:`Evaluation`: an LM trial that fails
+    needs only ``r``.
+
+    ``u`` holds the squared scaled direction ``(n_k / a_k)²`` (3, N), ``inner`` the inner power
+    mean P, and each ``*_parts`` the ``(ln q, ln(1 + q^(1/t)), q^(1/t))`` of its pair.
+    """
+
+    r: Array
+    local: Array
+    n: Array
+    rho: Array
+    rad: Array
+    u: Array
+    inner: Array
+    inner_parts: tuple[Array, Array, Array]
+    outer_parts: tuple[Array, Array, Array]
+    eps1: float
+    eps2: float
+
+
+@dataclass
 class Evaluation:
     """Scaled radial distances at a state, with what the Jacobian needs (all (3, N) or (N,)).
 
@@ -100,63 +124,100 @@ class Evaluation:
     eps2: float
 
 
-def _pair(u: Array, v: Array, t: float) -> tuple[Array, Array, Array, tuple[Array, Array, Array]]:
-    """``phi(u, v, t)``, the shares of u and v, and ``(ln q, ln(1 + q^(1/t)), s_lo)`` for d/dt.
+# At the fits' 1500 points the cost is per array operation more than per element, so the
+# functions below work in place on few buffers.
 
-    ``q = lo / hi`` is floored at 1e-300, so ``ln q`` stays finite and ``q^(1/t)`` underflows to
-    a share of zero where the smaller term vanishes.
+
+def _power_mean(u: Array, v: Array, t: float) -> tuple[Array, tuple[Array, Array, Array]]:
+    """``phi(u, v, t)`` and ``(ln q, ln(1 + q^(1/t)), q^(1/t))``, ``q = lo / hi`` of the pair.
+
+    ``q`` is floored at 1e-300, so ``ln q`` stays finite and ``q^(1/t)`` underflows to a share
+    of zero where the smaller term vanishes.
     """
     hi = np.maximum(u, v)
-    log_q = np.log(np.maximum(np.minimum(u, v) / np.maximum(hi, _TINY), _TINY))
-    qt = np.exp(log_q * (1.0 / t))
+    log_q = np.minimum(u, v)
+    log_q /= np.maximum(hi, _TINY)
+    np.log(np.maximum(log_q, _TINY, out=log_q), out=log_q)
+    qt = log_q * (1.0 / t)
+    np.exp(qt, out=qt)
     log_1qt = np.log1p(qt)
-    value = hi * np.exp(t * log_1qt)
-    s_lo = qt / (1.0 + qt)
+    value = np.exp(log_1qt * t)
+    value *= hi
+    return value, (log_q, log_1qt, qt)
+
+
+def _shares(
+    u: Array, v: Array, parts: tuple[Array, Array, Array]
+) -> tuple[Array, Array, tuple[Array, Array, Array]]:
+    """The shares of u and v in their power mean, and ``(ln q, ln(1 + q^(1/t)), s_lo)`` for
+    :func:`_dlog_dt`."""
+    log_q, log_1qt, qt = parts
+    s_lo = qt + 1.0
+    np.divide(qt, s_lo, out=s_lo)
     s_u = np.where(u >= v, 1.0 - s_lo, s_lo)
-    return value, s_u, 1.0 - s_u, (log_q, log_1qt, s_lo)
+    return s_u, 1.0 - s_u, (log_q, log_1qt, s_lo)
 
 
-def _dlog_dt(pieces: tuple[Array, Array, Array], t: float) -> Array:
-    """``d ln phi / d t = ln(1 + q^(1/t)) - s_lo ln(q) / t``."""
+def _dlog_dt(pieces: tuple[Array, Array, Array], t: float, out: Array) -> Array:
+    """``d ln phi / d t = ln(1 + q^(1/t)) - s_lo ln(q) / t``, written to ``out``."""
     log_q, log_1qt, s_lo = pieces
-    return log_1qt - s_lo * log_q * (1.0 / t)
+    np.multiply(s_lo, log_q, out=out)
+    out *= 1.0 / t
+    return np.subtract(log_1qt, out, out=out)
 
 
-def evaluate(points_t: Array, state: SQState) -> Evaluation:
-    """Scaled signed radial distances ``d`` (N,), metres, of the points ``points_t`` (3, N)."""
+def partial_evaluate(points_t: Array, state: SQState) -> PartialEvaluation:
+    """Signed radial distances ``r`` (N,), metres, of the points ``points_t`` (3, N)."""
     local = state.rotation.T @ (points_t - state.translation[:, None])
     rho = np.sqrt(np.einsum("ij,ij->j", local, local))
-    n = local / np.maximum(rho, _RHO_MIN)
-    if rho.min() < _RHO_MIN:  # the centre itself: any direction will do
+    rho_min = rho.min()
+    n = local / (rho if rho_min >= _RHO_MIN else np.maximum(rho, _RHO_MIN))
+    if rho_min < _RHO_MIN:  # the centre itself: any direction will do
         n[:, rho < _RHO_MIN] = ((0.0,), (0.0,), (1.0,))
         rho = np.where(rho < _RHO_MIN, 0.0, rho)
     u = n / state.scale[:, None]
     u *= u
-    inner, s_x, s_y, inner_pieces = _pair(u[0], u[1], state.eps2)
-    g, s_p, s_z, outer_pieces = _pair(inner, u[2], state.eps1)
-    rad = 1.0 / np.sqrt(g)
+    inner, inner_parts = _power_mean(u[0], u[1], state.eps2)
+    g, outer_parts = _power_mean(inner, u[2], state.eps1)
+    rad = np.divide(1.0, np.sqrt(g, out=g), out=g)
+    return PartialEvaluation(
+        rho - rad, local, n, rho, rad, u, inner, inner_parts, outer_parts, state.eps1, state.eps2
+    )
+
+
+def complete(part: PartialEvaluation) -> Evaluation:
+    """The full :class:`Evaluation` of a :class:`PartialEvaluation`."""
+    u, n = part.u, part.n
+    s_x, s_y, inner_pieces = _shares(u[0], u[1], part.inner_parts)
+    s_p, s_z, outer_pieces = _shares(part.inner, u[2], part.outer_parts)
     c = np.empty_like(u)
     np.multiply(s_p, s_x, out=c[0])
     np.multiply(s_p, s_y, out=c[1])
     c[2] = s_z
-    c_over_n = c / np.where(n != 0.0, n, np.inf)
-    cos = 1.0 / np.sqrt(np.einsum("ij,ij->j", c_over_n, c_over_n))
-    r = rho - rad
+    # c / n with c / 0 read as 0 (an axis the ray does not move along adds no slope)
+    c_over_n = c / n if n.all() else c / np.where(n != 0.0, n, np.inf)
+    cos = np.einsum("ij,ij->j", c_over_n, c_over_n)
+    np.divide(1.0, np.sqrt(cos, out=cos), out=cos)
     return Evaluation(
-        d=r * cos,
-        r=r,
-        local=local,
+        d=part.r * cos,
+        r=part.r,
+        local=part.local,
         n=n,
-        rho=rho,
-        rad=rad,
+        rho=part.rho,
+        rad=part.rad,
         c=c,
         c_over_n=c_over_n,
         cos=cos,
         inner=inner_pieces,
         outer=outer_pieces,
-        eps1=state.eps1,
-        eps2=state.eps2,
+        eps1=part.eps1,
+        eps2=part.eps2,
     )
+
+
+def evaluate(points_t: Array, state: SQState) -> Evaluation:
+    """Scaled signed radial distances ``d`` (N,), metres, of the points ``points_t`` (3, N)."""
+    return complete(partial_evaluate(points_t, state))
 
 
 def jacobian(ev: Evaluation, rows: NDArray[np.int64] | None = None) -> Array:
@@ -171,15 +232,22 @@ def jacobian(ev: Evaluation, rows: NDArray[np.int64] | None = None) -> Array:
         outer = tuple(a[rows] for a in ev.outer)
     half = 0.5 * rad
     jac = np.empty((11, rad.size))
-    np.multiply(half, _dlog_dt(outer, ev.eps1), out=jac[0])
-    np.multiply(half * (c[0] + c[1]), _dlog_dt(inner, ev.eps2), out=jac[1])
+    np.multiply(_dlog_dt(outer, ev.eps1, jac[0]), half, out=jac[0])
+    slope = c[0] + c[1]
+    slope *= half
+    np.multiply(_dlog_dt(inner, ev.eps2, jac[1]), slope, out=jac[1])
     np.multiply(-rad, c, out=jac[2:5])
-    grad = n - (rad / np.where(rho > 0.0, rho, np.inf)) * (n - c_over_n)
-    # grad x local, row by row
-    jac[5] = grad[1] * local[2] - grad[2] * local[1]
-    jac[6] = grad[2] * local[0] - grad[0] * local[2]
-    jac[7] = grad[0] * local[1] - grad[1] * local[0]
-    np.negative(grad, out=jac[8:11])
+    # grad = n - (rad / rho) (n - c / n), with rad / 0 read as 0 at the centre; rows x y z x y,
+    # so that grad x local is three whole-array operations on shifted rows
+    grad = np.empty((5, rad.size))
+    np.subtract(n, c_over_n, out=grad[:3])
+    grad[:3] *= rad / rho if rho.min() > 0.0 else rad / np.where(rho > 0.0, rho, np.inf)
+    np.subtract(n, grad[:3], out=grad[:3])
+    grad[3:] = grad[:2]
+    local = np.concatenate((local, local[:2]))
+    np.multiply(grad[1:4], local[2:5], out=jac[5:8])
+    jac[5:8] -= grad[2:5] * local[1:4]
+    np.negative(grad[:3], out=jac[8:11])
     return jac
 
 
@@ -199,10 +267,10 @@ def apply_increment(
     w = delta[5:8]
     angle = math.sqrt(float(w @ w))
     rotation = state.rotation
-    if angle > 0.0:
-        kx, ky, kz = w / angle
+    if angle > 0.0:  # Rodrigues' formula; k from Python floats, which numpy reads quicker
+        kx, ky, kz = (w / angle).tolist()
         k = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
-        rotation = rotation @ (np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k))
+        rotation = rotation @ (_EYE3 + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k))
     lo, hi = eps_bounds
     return SQState(
         min(max(state.eps1 + float(delta[0]), lo), hi),
