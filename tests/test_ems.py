@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
+import warnings
 
+import numpy as np
+import pytest
+
+from hsqbench.planner import ems
 from hsqbench.planner.config import RecoveryConfig
 from hsqbench.planner.ems import MixtureModel, _Fitter, ems_fit
 from hsqbench.planner.radial import SQState
@@ -106,3 +110,14 @@ def test_annealing_floors_sigma_early_and_not_later() -> None:
     fitter.iterations = 40
     assert fitter._sigma2(ev, np.zeros(5), 1e-8) == cfg.sigma_min_m**2
     assert np.isclose(fitter._sigma2(ev, w, 1e-8), 0.05**2 / 3.0, rtol=1e-3)
+
+
+@pytest.mark.parametrize("solve", [ems._solve, ems._solve_or_nan])
+def test_the_lm_solve_gives_the_step_or_nan_for_a_singular_system(solve) -> None:
+    rng = np.random.default_rng(0)
+    m = rng.normal(size=(11, 11))
+    a, b = m @ m.T + np.eye(11), rng.normal(size=11)
+    assert np.allclose(solve(a, b), np.linalg.solve(a, b), rtol=1e-12, atol=0.0)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert np.isnan(solve(np.zeros((11, 11)), b)).all()

@@ -46,7 +46,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.linalg import _umath_linalg
 from numpy.typing import NDArray
 
 from hsqbench.planner.config import RecoveryConfig
@@ -61,6 +60,20 @@ from hsqbench.planner.radial import (
 )
 
 Array = NDArray[np.float64]
+
+
+def _solve_or_nan(a: Array, b: Array) -> Array:
+    """``np.linalg.solve``, with NaN where it would raise for a singular system."""
+    try:
+        return np.linalg.solve(a, b)
+    except np.linalg.LinAlgError:
+        return np.full_like(b, np.nan)
+
+
+try:  # np.linalg.solve's own gufunc (private, so looked up once, with a public fallback)
+    from numpy.linalg._umath_linalg import solve1 as _solve
+except ImportError:  # pragma: no cover - a numpy that moved it
+    _solve = _solve_or_nan
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 #: Cap on the log odds of a point (exp(700) is finite; no real point comes near it).
@@ -215,7 +228,7 @@ class _Fitter:
             # np.linalg.solve's own gufunc: its wrapper's checks and error-state context cost
             # more than the 11 x 11 solve. Where the wrapper raises LinAlgError (a singular
             # system) this gives NaN, and the NaN step fails the cost test below just the same.
-            delta = _umath_linalg.solve1(damped, minus_g)
+            delta = _solve(damped, minus_g)
             log_steps = delta[2:5]  # clipped in place (np.clip costs more on 3 numbers)
             np.minimum(
                 np.maximum(log_steps, -_MAX_LOG_STEP, out=log_steps), _MAX_LOG_STEP, out=log_steps
