@@ -58,6 +58,7 @@ from hsqbench.planner.radial import (
     jacobian,
     partial_evaluate,
 )
+from hsqbench.superquadric import N_PARAMS
 
 Array = NDArray[np.float64]
 
@@ -80,7 +81,6 @@ _LOG_2PI = float(np.log(2.0 * np.pi))
 _LOG_ODDS_MAX = 700.0
 #: Largest change of a log-scale in one LM step; keeps exp() finite on a wild step.
 _MAX_LOG_STEP = 2.0
-_N_PARAMS = 11
 #: Levenberg-Marquardt damping: start, bounds, and the factors on success and failure.
 _LAMBDA = (1e-2, 1e-7, 1e7, 0.3, 10.0)
 
@@ -223,7 +223,7 @@ class _Fitter:
                 diag = h.diagonal().copy()
                 np.maximum(diag, 1e-12 * max(float(diag.max()), 1e-300), out=diag)
             damped = h.copy()
-            damped_diag = damped.reshape(-1)[:: _N_PARAMS + 1]  # a view
+            damped_diag = damped.reshape(-1)[:: N_PARAMS + 1]  # a view
             damped_diag += lam * diag
             # np.linalg.solve's own gufunc: its wrapper's checks and error-state context cost
             # more than the 11 x 11 solve. Where the wrapper raises LinAlgError (a singular
