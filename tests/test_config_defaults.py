@@ -35,6 +35,7 @@ NOT_DEFAULTS = {
     "paper3_facing",
     "paper3_bodies",
     "paper_pile",
+    "paper3_pile",
     "paper_ablation",
     "ycb_ablation",
     "quick",
