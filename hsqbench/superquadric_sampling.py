@@ -62,7 +62,7 @@ def _greedy_thinning(
     same_side = np.einsum("ij,ij->i", normals[i], normals[j]) > _SAME_SIDE_MIN_COS
     pairs = pairs[same_side & (dist < np.where(spare[i] | spare[j], spare_dist, min_dist))]
     rank = np.empty(n, dtype=np.int64)
-    rank[np.lexsort((np.arange(n), priority))] = np.arange(n)
+    rank[np.argsort(priority, kind="stable")] = np.arange(n)  # ties in index order
     while pairs.size:
         i, j = pairs[:, 0], pairs[:, 1]
         best = np.full(n, -1, dtype=np.int64)

@@ -58,7 +58,6 @@ from hsqbench.planner.radial import (
     jacobian,
     partial_evaluate,
 )
-from hsqbench.superquadric import N_PARAMS
 
 Array = NDArray[np.float64]
 
@@ -222,9 +221,9 @@ class _Fitter:
                 minus_g = -(wj @ ev.r)  # solving for -g gives the step itself, exactly
                 diag = h.diagonal().copy()
                 np.maximum(diag, 1e-12 * max(float(diag.max()), 1e-300), out=diag)
-            damped = h.copy()
-            damped_diag = damped.reshape(-1)[:: N_PARAMS + 1]  # a view
-            damped_diag += lam * diag
+                diag = np.diag(diag)  # as a matrix: damped in two operations, h + 0 = h
+            damped = lam * diag
+            damped += h
             # np.linalg.solve's own gufunc: its wrapper's checks and error-state context cost
             # more than the 11 x 11 solve. Where the wrapper raises LinAlgError (a singular
             # system) this gives NaN, and the NaN step fails the cost test below just the same.

@@ -23,12 +23,18 @@ def _line_coordinates(
     add overhead on a busy machine.
     """
     e2 = np.cross(directions, approach0)
-    rel = [points[:, k, None].astype(np.float32) for k in range(3)]
+    rel = [points[:, k].astype(np.float32) for k in range(3)]
 
     def project(axes: NDArray) -> NDArray:
+        # Summed as (L, M), whose rows are long, then transposed once: an (M, L) broadcast
+        # walks rows of only L (a few dozen) elements, at twice the cost. Same sums, same order.
         offset = np.einsum("ij,ij->i", centres, axes).astype(np.float32)
-        a = axes.astype(np.float32)
-        return rel[0] * a[:, 0] + rel[1] * a[:, 1] + rel[2] * a[:, 2] - offset
+        a = axes.T.astype(np.float32)[:, :, None]
+        out = rel[0] * a[0]
+        out += rel[1] * a[1]
+        out += rel[2] * a[2]
+        out -= offset[:, None]
+        return np.ascontiguousarray(out.T)
 
     return project(directions), project(approach0), project(e2)
 

@@ -90,7 +90,7 @@ class PartialEvaluation:
     """
 
     r: Array
-    local: Array
+    local: Array  # (5, N): rows x y z, then x y again once :func:`jacobian` has run
     n: Array
     rho: Array
     rad: Array
@@ -111,7 +111,7 @@ class Evaluation:
 
     d: Array
     r: Array
-    local: Array
+    local: Array  # as in PartialEvaluation
     n: Array
     rho: Array
     rad: Array
@@ -128,15 +128,18 @@ class Evaluation:
 # functions below work in place on few buffers.
 
 
-def _power_mean(u: Array, v: Array, t: float) -> tuple[Array, tuple[Array, Array, Array]]:
+def _power_mean(
+    u: Array, v: Array, t: float, hi_positive: bool = False
+) -> tuple[Array, tuple[Array, Array, Array]]:
     """``phi(u, v, t)`` and ``(ln q, ln(1 + q^(1/t)), q^(1/t))``, ``q = lo / hi`` of the pair.
 
     ``q`` is floored at 1e-300, so ``ln q`` stays finite and ``q^(1/t)`` underflows to a share
-    of zero where the smaller term vanishes.
+    of zero where the smaller term vanishes. ``hi_positive``: the caller knows that the larger
+    term is at least 1e-300, so the floor on the divisor, a no-op then, is skipped.
     """
     hi = np.maximum(u, v)
     log_q = np.minimum(u, v)
-    log_q /= np.maximum(hi, _TINY)
+    log_q /= hi if hi_positive else np.maximum(hi, _TINY)
     np.log(np.maximum(log_q, _TINY, out=log_q), out=log_q)
     qt = log_q * (1.0 / t)
     np.exp(qt, out=qt)
@@ -147,15 +150,15 @@ def _power_mean(u: Array, v: Array, t: float) -> tuple[Array, tuple[Array, Array
 
 
 def _shares(
-    u: Array, v: Array, parts: tuple[Array, Array, Array]
+    u: Array, v: Array, parts: tuple[Array, Array, Array], out_v: Array | None = None
 ) -> tuple[Array, Array, tuple[Array, Array, Array]]:
-    """The shares of u and v in their power mean, and ``(ln q, ln(1 + q^(1/t)), s_lo)`` for
-    :func:`_dlog_dt`."""
+    """The shares of u and v in their power mean (that of v written to ``out_v`` if given),
+    and ``(ln q, ln(1 + q^(1/t)), s_lo)`` for :func:`_dlog_dt`."""
     log_q, log_1qt, qt = parts
     s_lo = qt + 1.0
     np.divide(qt, s_lo, out=s_lo)
     s_u = np.where(u >= v, 1.0 - s_lo, s_lo)
-    return s_u, 1.0 - s_u, (log_q, log_1qt, s_lo)
+    return s_u, np.subtract(1.0, s_u, out=out_v), (log_q, log_1qt, s_lo)
 
 
 def _dlog_dt(pieces: tuple[Array, Array, Array], t: float, out: Array) -> Array:
@@ -168,7 +171,9 @@ def _dlog_dt(pieces: tuple[Array, Array, Array], t: float, out: Array) -> Array:
 
 def partial_evaluate(points_t: Array, state: SQState) -> PartialEvaluation:
     """Signed radial distances ``r`` (N,), metres, of the points ``points_t`` (3, N)."""
-    local = state.rotation.T @ (points_t - state.translation[:, None])
+    # rows x y z x y: the Jacobian's cross product needs x and y repeated (filled there)
+    local5 = np.empty((5, points_t.shape[1]))
+    local = np.matmul(state.rotation.T, points_t - state.translation[:, None], out=local5[:3])
     rho = np.sqrt(np.einsum("ij,ij->j", local, local))
     rho_min = rho.min()
     n = local / (rho if rho_min >= _RHO_MIN else np.maximum(rho, _RHO_MIN))
@@ -178,22 +183,23 @@ def partial_evaluate(points_t: Array, state: SQState) -> PartialEvaluation:
     u = n / state.scale[:, None]
     u *= u
     inner, inner_parts = _power_mean(u[0], u[1], state.eps2)
-    g, outer_parts = _power_mean(inner, u[2], state.eps1)
+    # inner >= max(u[0], u[1]) and n is a unit vector, so max(inner, u[2]) >= 1 / (3 a_max²),
+    # far above the floor of _power_mean
+    g, outer_parts = _power_mean(inner, u[2], state.eps1, hi_positive=True)
     rad = np.divide(1.0, np.sqrt(g, out=g), out=g)
     return PartialEvaluation(
-        rho - rad, local, n, rho, rad, u, inner, inner_parts, outer_parts, state.eps1, state.eps2
+        rho - rad, local5, n, rho, rad, u, inner, inner_parts, outer_parts, state.eps1, state.eps2
     )
 
 
 def complete(part: PartialEvaluation) -> Evaluation:
     """The full :class:`Evaluation` of a :class:`PartialEvaluation`."""
     u, n = part.u, part.n
-    s_x, s_y, inner_pieces = _shares(u[0], u[1], part.inner_parts)
-    s_p, s_z, outer_pieces = _shares(part.inner, u[2], part.outer_parts)
     c = np.empty_like(u)
+    s_x, s_y, inner_pieces = _shares(u[0], u[1], part.inner_parts)
+    s_p, _, outer_pieces = _shares(part.inner, u[2], part.outer_parts, out_v=c[2])
     np.multiply(s_p, s_x, out=c[0])
     np.multiply(s_p, s_y, out=c[1])
-    c[2] = s_z
     # c / n with c / 0 read as 0 (an axis the ray does not move along adds no slope)
     c_over_n = c / n if n.all() else c / np.where(n != 0.0, n, np.inf)
     cos = np.einsum("ij,ij->j", c_over_n, c_over_n)
@@ -244,7 +250,7 @@ def jacobian(ev: Evaluation, rows: NDArray[np.int64] | None = None) -> Array:
     grad[:3] *= rad / rho if rho.min() > 0.0 else rad / np.where(rho > 0.0, rho, np.inf)
     np.subtract(n, grad[:3], out=grad[:3])
     grad[3:] = grad[:2]
-    local = np.concatenate((local, local[:2]))
+    local[3:] = local[:2]
     np.multiply(grad[1:4], local[2:5], out=jac[5:8])
     jac[5:8] -= grad[2:5] * local[1:4]
     np.negative(grad[:3], out=jac[8:11])
