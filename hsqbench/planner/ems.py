@@ -44,6 +44,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -91,12 +92,19 @@ class MixtureModel:
     outlier_weight: float
     volume_m3: float
 
+    @cached_property
+    def _log_out(self) -> float:
+        """``ln(w_o / V)``, as ``ln w_o - ln V``."""
+        return np.log(self.outlier_weight) - np.log(self.volume_m3)
+
+    @cached_property
+    def _log_odds_prior(self) -> float:
+        """``ln w_o - ln V - ln(1 - w_o)``: the part of ``ln k`` that does not depend on sigma."""
+        return self._log_out - np.log1p(-self.outlier_weight)
+
     def log_k(self, sigma2: float) -> float:
         """``ln k``: the outlier-to-inlier density ratio at zero distance, prior included."""
-        w = self.outlier_weight
-        return float(
-            np.log(w) - np.log(self.volume_m3) - np.log1p(-w) + 1.5 * (_LOG_2PI + np.log(sigma2))
-        )
+        return float(self._log_odds_prior + 1.5 * (_LOG_2PI + np.log(sigma2)))
 
     def odds(self, d: Array, sigma2: float) -> Array:
         """Inlier-to-outlier density ratio of each point, ``exp(-ln k - d² / 2 sigma²)``."""
@@ -113,8 +121,7 @@ class MixtureModel:
 
     def nll_of_odds(self, odds: Array, weights: Array) -> float:
         """:meth:`nll` from the points' :meth:`odds`."""
-        log_out = np.log(self.outlier_weight) - np.log(self.volume_m3)
-        return float(-log_out - weights @ np.log1p(odds) / weights.sum())
+        return float(-self._log_out - weights @ np.log1p(odds) / weights.sum())
 
 
 def _posterior(odds: Array) -> Array:

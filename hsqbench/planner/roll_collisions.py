@@ -123,24 +123,29 @@ def body_hits(
     if lines.size == 0 or points.shape[0] == 0:
         return out
     L = cands.lines
-    for sl in _chunks(lines.size, points.shape[0]):
+    n_points = points.shape[0]
+    for sl in _chunks(lines.size, n_points):
         idx = lines[sl]
         n = idx.size
-        s, u, v = _line_coordinates(points, L.centres[idx], L.directions[idx], L.approach0[idx])
+        # (lines, points): the per-line bounds below broadcast along long rows; the markers
+        # are integer counts, so the order in which points are met does not matter
+        s, u, v = _line_coordinates(
+            points, L.centres[idx], L.directions[idx], L.approach0[idx], lines_first=True
+        )
         r2 = u * u + v * v
         obstacle = None
         if obstacle_radius is not None:
-            obstacle = np.abs(s) <= obstacle_half_height[sl].astype(np.float32)
-            obstacle &= r2 > (obstacle_radius[sl] ** 2).astype(np.float32)
+            obstacle = np.abs(s) <= obstacle_half_height[sl, None].astype(np.float32)
+            obstacle &= r2 > (obstacle_radius[sl, None] ** 2).astype(np.float32)
         diff = np.zeros((n, 4 * n_roll + 1), dtype=np.int64)
-        chunk_boxes = boxes[sl].astype(np.float32)
+        chunk_boxes = boxes[sl, :, :, :1].astype(np.float32)  # extents along the line
         for b in range(boxes.shape[1]):
             (_, _, z_lo), (_, y_hi, z_hi) = boxes[0, b]
             # The box's distance range from the line bounds r: a cheap filter before any
             # trigonometry.
             r_min = max(z_lo, -z_hi, 0.0)
             r_max2 = max(z_lo**2, z_hi**2) + y_hi**2
-            mask = (s >= chunk_boxes[:, b, 0, 0]) & (s <= chunk_boxes[:, b, 1, 0])
+            mask = (s >= chunk_boxes[:, b, 0]) & (s <= chunk_boxes[:, b, 1])
             mask &= (r2 >= r_min * r_min) & (r2 <= r_max2)
             if obstacle is not None:
                 mask &= obstacle
@@ -149,7 +154,7 @@ def body_hits(
                 continue
             r = np.sqrt(r2.flat[flat])
             theta = np.arctan2(v.flat[flat], u.flat[flat])
-            _mark_arcs(r, theta, flat % n, boxes[0, b], n_roll, diff)
+            _mark_arcs(r, theta, flat // n_points, boxes[0, b], n_roll, diff)
         # Points covering each roll (a point's arcs in one box are disjoint, the boxes too).
         inside = np.cumsum(diff, axis=1)[:, : 4 * n_roll].reshape(n, 4, n_roll).sum(axis=1)
         out[sl] = inside > max_points
