@@ -228,8 +228,8 @@ class _Fitter:
                 minus_g = -(wj @ ev.r)  # solving for -g gives the step itself, exactly
                 diag = h.diagonal().copy()
                 np.maximum(diag, 1e-12 * max(float(diag.max()), 1e-300), out=diag)
-                diag = np.diag(diag)  # as a matrix: damped in two operations, h + 0 = h
-            damped = lam * diag
+                scaling = np.diag(diag)  # as a matrix: damped in two operations, h + 0 = h
+            damped = lam * scaling
             damped += h
             # np.linalg.solve's own gufunc: its wrapper's checks and error-state context cost
             # more than the 11 x 11 solve. Where the wrapper raises LinAlgError (a singular
