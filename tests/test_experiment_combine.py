@@ -39,6 +39,13 @@ def test_a_later_planner_joins_the_main_runs_tables(tmp_path):
     t1 = table1(data).set_index("method")
     assert t1.loc["antipodal", "attempts"] == 6 and t1.loc["antipodal", "successes"] == 0
     assert t1.loc["hsq", "attempts"] == 6
+    # Each row names the run it came from: the joined run's backend, not "this run".
+    assert t1.loc["hsq", "source"] == "measured, fake backend (this run)"
+    assert t1.loc["antipodal", "source"] == "measured, fake backend (run later)"
+    antipodal_line = next(line for line in md.splitlines() if line.startswith("| antipodal |"))
+    assert antipodal_line.endswith("| measured, fake backend (run later) |")
+    assert "| 0/6 |" in antipodal_line  # joined rows keep their counts and intervals
+    assert '- "measured, fake backend (run later)": the rows of antipodal' in md
 
 
 def test_runs_of_other_poses_cannot_share_a_table(tmp_path):

@@ -64,6 +64,9 @@ def combine(main: Any, other: Any, other_dir: Path) -> None:
         [main.rounds, other.rounds[other.rounds["planner"].isin(new)]], ignore_index=True
     )
     main.planners = [*main.planners, *new]
+    # Rows keep their own run's provenance (its backend), named by that run, not "this run".
+    label = other.measured.replace("(this run", f"(run {other_dir.name}")
+    main.joined.update({p: other.joined.get(p, label) for p in new})
     versions = sorted(set(other.attempts["code_version"]))
     main.notes.append(
         f"rows of {', '.join(new)} come from run {other_dir.name} (config hash "

@@ -77,7 +77,7 @@ def _table1(data: RunData, t1: pd.DataFrame, conf: str, graspability: bool) -> l
         ]
     rows = []
     for _, r in t1.iterrows():
-        measured = r["source"] == data.measured
+        measured = r["source"] != PROVENANCE
         extra = []
         if graspability:
             extra = [
@@ -140,7 +140,7 @@ def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> l
     out = ["## Table II: packed scenes, GSR and CR (%)", ""]
     rows = []
     for _, r in t2.iterrows():
-        measured = r["source"] == data.measured
+        measured = r["source"] != PROVENANCE
         extra = []
         if graspability:
             extra = [
@@ -226,6 +226,11 @@ def _notes(data: RunData, graspability: bool) -> list[str]:
         "setups, quoted by the paper. They are context, not a like-for-like comparison.",
         f'- "{data.measured}": this run'
         + (", MuJoCo simulation." if data.measured == MEASURED else ", NOT a simulation."),
+        *(
+            f'- "{label}": the rows of {", ".join(p for p, lab in data.joined.items() if lab == label)}, '
+            "from that run (notes above)."
+            for label in dict.fromkeys(data.joined.values())
+        ),
         "",
     ]
     return out

@@ -65,7 +65,7 @@ def table4(data: RunData) -> pd.DataFrame:
         rows.append(
             {
                 "method": method_label(p),
-                "source": data.measured,
+                "source": data.source(p),
                 "gsr_percent": gsr["rate"],
                 "gsr_ci_low_percent": gsr["low"],
                 "gsr_ci_high_percent": gsr["high"],

@@ -11,7 +11,8 @@ Definitions (as in the paper, Section V):
   absent), pooled over base seeds.
 
 Rows marked "reported, real robot" are the paper's Tables I and II (other robots and setups for
-the baselines); rows marked "measured, simulation (this run)" come from this run's files.
+the baselines); rows marked "measured, simulation (this run)" come from this run's files, and
+"measured, simulation (run NAME)" from run NAME's, joined with ``--with``.
 """
 
 from __future__ import annotations
@@ -69,6 +70,12 @@ class RunData:
     confidence: float
     notes: list[str] = field(default_factory=list)
     measured: str = MEASURED  # provenance label of this run's rows (names a non-simulation backend)
+    # Planners joined from other runs (``--with``): planner -> their rows' provenance label.
+    joined: dict[str, str] = field(default_factory=dict)
+
+    def source(self, planner: str) -> str:
+        """The provenance label of ``planner``'s rows: this run's, or the run it was joined from."""
+        return self.joined.get(planner, self.measured)
 
 
 _NUMERIC = ("success", "attempt_index", "n_attempts", "base_seed", "planning_s", "trial_wall_s")
@@ -223,7 +230,7 @@ def table1(data: RunData) -> pd.DataFrame:
         rows.append(
             {
                 "method": method_label(p),
-                "source": data.measured,
+                "source": data.source(p),
                 **_rate_columns(rate, "gsr_percent", "", "successes", "attempts"),
                 **_rate_columns(
                     graspable,
@@ -297,7 +304,7 @@ def table2(data: RunData) -> pd.DataFrame:
         rows.append(
             {
                 "method": method_label(p),
-                "source": data.measured,
+                "source": data.source(p),
                 **_rate_columns(gsr, "gsr_percent", "gsr_", "successes", "attempts"),
                 **_rate_columns(cr, "cr_percent", "cr_", "objects_cleared", "objects_presented"),
                 **_rate_columns(
