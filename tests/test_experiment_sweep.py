@@ -146,8 +146,11 @@ def test_built_in_sweeps_load_and_every_point_is_a_valid_trial_config(name):
 
     sweep = load_sweep_config(name)
     assert [p.config for p in sweep.protocols] == ["paper", "ycb"]
-    # The paper's 15 spread their 45 attempts per point over three base seeds.
+    # Both protocols run three base seeds, as every GSR the README quotes: the paper's 15 by
+    # their own seeds, the unseen objects by the sweep's.
     assert point_config(sweep.protocols[0], sweep).seeds == (0, 1, 2)
+    unseen = sweep.protocols[1]
+    assert unseen.seeds is None and point_config(unseen, sweep).seeds == (0, 1, 2)
     for proto in sweep.protocols:
         config = point_config(proto, sweep)
         for point in sweep.parameters[0].points:
