@@ -99,6 +99,35 @@ def test_rerunning_resumes_every_point_and_new_seeds_get_new_runs(tmp_path, swee
     assert not set(more.runs) & set(first.runs)  # other sizes never resume into old runs
 
 
+def test_a_protocol_run_alone_keeps_the_other_protocols_runs(tmp_path, sweep):
+    other = tmp_path / "other.yaml"
+    other.write_text(PROTOCOL)
+    both = replace(sweep, protocols=(*sweep.protocols, SweepProtocol(str(other), seeds=(0,))))
+    root = tmp_path / "sw"
+    first = run_sweep(both, root, backend_factory=fake, progress=False)
+    before = pd.read_csv(root / CSV_FILE)
+    # The second protocol again, alone, on three seeds: new runs for it, the first's are kept.
+    alone = replace(both, protocols=(SweepProtocol(str(other), seeds=(0, 1, 2)),))
+    again = run_sweep(alone, root, backend_factory=fake, progress=False)
+    assert not set(again.runs) & set(first.runs)
+    after = pd.read_csv(root / CSV_FILE)
+    kept = after[after["protocol"] == "proto"].reset_index(drop=True)
+    pd.testing.assert_frame_equal(
+        kept, before[before["protocol"] == "proto"].reset_index(drop=True)
+    )
+    assert set(after[after["protocol"] == "other"]["n"]) == {3 * 3 * 10}  # seeds x objects x poses
+    meta = json.loads((root / SWEEP_FILE).read_text())["parameters"]["p"]
+    assert [(p["config"], p["seeds"]) for p in meta["protocols"]] == [
+        (str(tmp_path / "proto.yaml"), [0, 1]),
+        (str(other), [0, 1, 2]),
+    ]
+    # A parameter whose points changed starts its record afresh.
+    moved = replace(alone, parameters=(SweepParameter(name="p", path="p", values=(0.3,)),))
+    run_sweep(moved, root, backend_factory=fake, progress=False)
+    meta = json.loads((root / SWEEP_FILE).read_text())["parameters"]["p"]
+    assert [set(p["runs"]) for p in meta["points"]] == [{"other"}]
+
+
 def test_packed_rows_carry_the_clearance_rate(tmp_path, sweep):
     packed = replace(sweep, experiments=("packed",), parameters=sweep.parameters[:1])
     run_sweep(packed, tmp_path / "sw", backend_factory=fake, progress=False)
@@ -175,6 +204,12 @@ def test_cli_builds_an_ad_hoc_sweep_with_yaml_values():
     assert sweep.seeds == (3, 4) and sweep.parameters[0].name == "cameras"
     # --seeds replaces the protocols' own seeds too; --attempts-per-object keeps them.
     assert all(point_config(p, sweep).seeds == (3, 4) for p in sweep.protocols)
+    (sweep,) = _sweeps(build_parser().parse_args(["sweep", "cameras", "--protocol", "ycb"]))
+    assert [p.name for p in sweep.protocols] == ["ycb"]
+    with pytest.raises(
+        CommandError, match="not a protocol of sweep 'cameras'; its protocols: paper, ycb"
+    ):
+        _sweeps(build_parser().parse_args(["sweep", "cameras", "--protocol", "ycbb"]))
     args = build_parser().parse_args(["sweep", "cameras", "--attempts-per-object", "2"])
     (sweep,) = _sweeps(args)
     paper, ycb = sweep.protocols

@@ -33,9 +33,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--protocol",
         nargs="+",
-        default=["paper"],
+        default=None,
         metavar="CONFIG",
-        help="with --param: the protocol(s) (default paper)",
+        help="with --param: the protocol(s) (default paper); with sweep configs: run only these of "
+        "their protocols (e.g. ycb), keeping the others' recorded runs",
     )
     parser.add_argument(
         "--experiments",
@@ -103,7 +104,7 @@ def _sweeps(args: argparse.Namespace) -> list:
         name = args.param.replace(".", "_")
         sweeps = [
             SweepConfig(
-                protocols=tuple(SweepProtocol(p) for p in args.protocol),
+                protocols=tuple(SweepProtocol(p) for p in args.protocol or ["paper"]),
                 parameters=(SweepParameter(name=name, path=args.param, values=values),),
                 experiments=tuple(args.experiments),
             )
@@ -115,6 +116,16 @@ def _sweeps(args: argparse.Namespace) -> list:
     out = []
     for sweep in sweeps:
         changes = {}
+        if args.protocol and not args.param:
+            names = [p.name for p in sweep.protocols]
+            if unknown := [p for p in args.protocol if p not in names]:
+                raise CommandError(
+                    f"--protocol {' '.join(unknown)}: not a protocol of sweep "
+                    f"'{sweep.parameters[0].name}'; its protocols: {', '.join(names)}"
+                )
+            sweep = replace(
+                sweep, protocols=tuple(p for p in sweep.protocols if p.name in args.protocol)
+            )
         protocol_changes = {}
         if args.seeds is not None:
             # --seeds replaces every protocol's seeds too.

@@ -120,31 +120,57 @@ def _atomic_write(path: Path, text: str) -> None:
 def _record(
     root: Path, sweep: SweepConfig, parameters: Iterable[SweepParameter], dirs: dict
 ) -> None:
-    """Merge these parameters (with their points' run folders) into ``sweep.json``."""
+    """Merge these parameters (with their points' run folders) into ``sweep.json``.
+
+    A parameter recorded before with the same points keeps the runs of the protocols this sweep
+    leaves out (``hsqbench sweep NAME --protocol ycb``), so protocols can be run one at a time.
+    Each protocol is recorded with the seeds it ran.
+    """
     path = root / SWEEP_FILE
     meta = json.loads(path.read_text()) if path.exists() else {"parameters": {}}
+    mine = {proto.name for proto in sweep.protocols}
     for param in parameters:
+        kept, kept_runs = _others(meta["parameters"].get(param.name), param, mine)
         meta["parameters"][param.name] = {
             "axis": param.axis,
             "categorical": param.categorical,
             "experiments": list(sweep.experiments),
             "planners": list(sweep.planners),
             "seeds": list(sweep.seeds),
-            "protocols": [to_dict(p) for p in sweep.protocols],
+            "protocols": kept
+            + [
+                {**to_dict(p), "seeds": list(point_config(p, sweep).seeds)} for p in sweep.protocols
+            ],
             "points": [
                 {
                     "label": point.label,
                     "x": point.x,
                     "overrides": point.overrides,
                     "runs": {
-                        proto.name: str(dirs[param.name, i, proto.name].relative_to(root))
-                        for proto in sweep.protocols
+                        **kept_runs[i],
+                        **{
+                            proto.name: str(dirs[param.name, i, proto.name].relative_to(root))
+                            for proto in sweep.protocols
+                        },
                     },
                 }
                 for i, point in enumerate(param.points)
             ],
         }
     _atomic_write(path, json.dumps(meta, indent=2, sort_keys=True) + "\n")
+
+
+def _others(
+    old: dict | None, param: SweepParameter, mine: set[str]
+) -> tuple[list[dict], list[dict]]:
+    """The recorded protocols of ``param`` other than ``mine``, and their runs per point: none
+    when the record is of other points."""
+    points = [(point.label, point.overrides) for point in param.points]
+    if old is None or [(p["label"], p["overrides"]) for p in old["points"]] != points:
+        return [], [{} for _ in points]
+    protocols = [p for p in old["protocols"] if SweepProtocol(p["config"]).name not in mine]
+    runs = [{k: v for k, v in p["runs"].items() if k not in mine} for p in old["points"]]
+    return protocols, runs
 
 
 def run_sweep(
