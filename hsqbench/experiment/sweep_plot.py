@@ -33,6 +33,12 @@ def _n_text(rows: pd.DataFrame, prefix: str) -> str:
 
 def plot_parameter(rows: pd.DataFrame, param: dict[str, Any], path: Path) -> None:
     """Write the plot of one parameter's rows of ``sweep.csv`` to ``path``."""
+    draw_parameter(rows, param).savefig(path)
+
+
+def draw_parameter(rows: pd.DataFrame, param: dict[str, Any]) -> Any:
+    """The figure of one parameter's rows: a panel per protocol and rate, a planner keeping its
+    colour in every panel (protocols may have run different planners)."""
     labels = [p["label"] for p in param["points"]]
     xs = (
         np.arange(len(labels), dtype=float)
@@ -47,18 +53,20 @@ def plot_parameter(rows: pd.DataFrame, param: dict[str, Any], path: Path) -> Non
     ]
     fig = _figure(4.6 * min(3, len(panels)), 3.6 * int(np.ceil(len(panels) / 3)))
     level = round(100 * float(rows["confidence"].iloc[0]))
+    colours = {p: f"C{i}" for i, p in enumerate(dict.fromkeys(rows["planner"]))}
     for k, (proto, exp, prefix, title) in enumerate(panels):
         ax = fig.add_subplot(int(np.ceil(len(panels) / 3)), min(3, len(panels)), k + 1)
         mine = rows[(rows["protocol"] == proto) & (rows["experiment"] == exp)]
         for planner in dict.fromkeys(mine["planner"]):
             line = mine[mine["planner"] == planner].sort_values("point")
             x = xs[line["point"].to_numpy(dtype=int)]
-            ax.plot(x, line[f"{prefix}_percent"], marker="o", label=planner)
+            ax.plot(x, line[f"{prefix}_percent"], marker="o", label=planner, color=colours[planner])
             ax.fill_between(
                 x,
                 line[f"{prefix}_ci_low_percent"].to_numpy(dtype=float),
                 line[f"{prefix}_ci_high_percent"].to_numpy(dtype=float),
                 alpha=0.18,
+                color=colours[planner],
             )
         ax.set_xticks(xs, labels, rotation=20 if max(map(len, labels)) > 6 else 0)
         ax.set_ylim(0, 100)
@@ -71,4 +79,4 @@ def plot_parameter(rows: pd.DataFrame, param: dict[str, Any], path: Path) -> Non
         )
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.savefig(path)
+    return fig
