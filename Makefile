@@ -93,8 +93,8 @@ benchmark: $(STAMP)
 # objects, into results/sweeps/ (sweep.csv, one PNG per parameter, a run per point). With JOBS=2
 # on a 2-core machine the unseen objects' three seeds took 49 min for hsq and antipodal alone;
 # contact-graspnet, where installed, adds about 15 min per sweep on the paper's objects
-# (SWEEP_PLANNERS="hsq single-sq antipodal" leaves it out). Rerunning with the same planners
-# resumes; SWEEP_ARGS="--seeds 0 1 2 3 4" scales them up (new runs, narrower bands).
+# (SWEEP_PLANNERS="hsq single-sq antipodal" leaves it out; a later run adds it to the same runs).
+# Rerunning resumes; SWEEP_ARGS="--seeds 0 1 2 3 4" scales them up (new runs, narrower bands).
 SWEEPS ?= depth_noise calibration cameras pad_friction
 SWEEP_PLANNERS ?=
 SWEEP_ARGS ?=

@@ -128,6 +128,29 @@ def test_a_protocol_run_alone_keeps_the_other_protocols_runs(tmp_path, sweep):
     assert [set(p["runs"]) for p in meta["points"]] == [{"other"}]
 
 
+def test_planners_run_one_at_a_time_share_the_points_runs(tmp_path, sweep):
+    root = tmp_path / "sw"
+    first = run_sweep(sweep, root, backend_factory=fake, planners=("a",), progress=False)
+    later = run_sweep(sweep, root, backend_factory=fake, planners=("b",), progress=False)
+    assert set(later.runs) == set(first.runs)
+    table = pd.read_csv(root / CSV_FILE)
+    assert set(table["planner"]) == {"a", "b"} and set(table["n"]) == {2 * 3 * 4}
+
+
+def test_cli_planners_pick_what_runs_without_changing_the_sweeps_runs():
+    from hsqbench.cli import build_parser
+    from hsqbench.commands.sweep import _sweeps, run_planners
+
+    full = load_sweep_config("cameras").planners
+    args = build_parser().parse_args(["sweep", "cameras", "--planners", "hsq", "antipodal"])
+    (sweep,) = _sweeps(args)
+    assert sweep.planners == full  # the points' run folders do not depend on --planners
+    assert run_planners(args, sweep) == ("hsq", "antipodal")
+    args = build_parser().parse_args(["sweep", "cameras", "--planners", "hsq-paper"])
+    (sweep,) = _sweeps(args)
+    assert sweep.planners == (*full, "hsq-paper") and run_planners(args, sweep) == ("hsq-paper",)
+
+
 def test_packed_rows_carry_the_clearance_rate(tmp_path, sweep):
     packed = replace(sweep, experiments=("packed",), parameters=sweep.parameters[:1])
     run_sweep(packed, tmp_path / "sw", backend_factory=fake, progress=False)

@@ -52,7 +52,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="isolated attempts per object and seed at every point (overrides the sweep's)",
     )
-    parser.add_argument("--planners", nargs="+", default=None, metavar="NAME", help="planners")
+    parser.add_argument(
+        "--planners",
+        nargs="+",
+        default=None,
+        metavar="NAME",
+        help="run only these planners (the sweep's others can be added later to the same runs)",
+    )
     parser.add_argument(
         "--seeds",
         nargs="+",
@@ -131,8 +137,10 @@ def _sweeps(args: argparse.Namespace) -> list:
             # --seeds replaces every protocol's seeds too.
             changes["seeds"] = tuple(args.seeds)
             protocol_changes["seeds"] = None
-        if args.planners is not None:
-            changes["planners"] = tuple(args.planners)
+        # The sweep's own planners stay its runs' identity (--planners only picks which of them
+        # run, see run_planners); a planner it lacks joins the list, which means new runs.
+        if extra := [p for p in args.planners or () if p not in sweep.planners]:
+            changes["planners"] = (*sweep.planners, *extra)
         if args.attempts_per_object is not None:
             protocol_changes["attempts_per_object"] = args.attempts_per_object
         if protocol_changes:
@@ -143,13 +151,13 @@ def _sweeps(args: argparse.Namespace) -> list:
     return out
 
 
-def _available(sweep):
-    """The sweep without optional planners whose extra is not installed (said on stderr)."""
-    from dataclasses import replace
-
+def run_planners(args: argparse.Namespace, sweep) -> tuple[str, ...]:
+    """The planners to run now: ``--planners`` or all of the sweep's, less those whose optional
+    extra is not installed (said on stderr). The sweep's planner list is left as it is, so the
+    points' run folders are the same with or without them and a later run adds the rest."""
     from hsqbench.planner.registry import runnable
 
-    return replace(sweep, planners=tuple(runnable(sweep.planners)))
+    return tuple(runnable(args.planners or sweep.planners))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -164,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         written = write_sweep_report(root)
         print(f"sweep report: {written[0]} (+{len(written) - 1} plots)")
         return 0
-    sweeps = [_available(s) for s in _sweeps(args)]
+    sweeps = _sweeps(args)
     executor = make_executor(args.executor, args.jobs)
     errors = 0
     try:
@@ -173,6 +181,7 @@ def run(args: argparse.Namespace) -> int:
                 sweep,
                 root,
                 executor=executor,
+                planners=run_planners(args, sweep),
                 only=args.only,
                 retry_errors=args.retry_errors,
             )
