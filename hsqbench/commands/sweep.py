@@ -5,6 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from hsqbench.experiment.sweep_config import SweepConfig
 
 HELP = (
     "robustness sweeps: run a protocol at each value of config parameters (depth noise, "
@@ -151,7 +155,7 @@ def _sweeps(args: argparse.Namespace) -> list:
     return out
 
 
-def run_planners(args: argparse.Namespace, sweep) -> tuple[str, ...]:
+def run_planners(args: argparse.Namespace, sweep: SweepConfig) -> tuple[str, ...]:
     """The planners to run now: ``--planners`` or all of the sweep's, less those whose optional
     extra is not installed (said on stderr). The sweep's planner list is left as it is, so the
     points' run folders are the same with or without them and a later run adds the rest."""

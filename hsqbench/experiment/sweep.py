@@ -118,7 +118,11 @@ def _atomic_write(path: Path, text: str) -> None:
 
 
 def _record(
-    root: Path, sweep: SweepConfig, parameters: Iterable[SweepParameter], dirs: dict
+    root: Path,
+    sweep: SweepConfig,
+    parameters: Iterable[SweepParameter],
+    dirs: dict,
+    configs: dict[str, ExperimentConfig],
 ) -> None:
     """Merge these parameters (with their points' run folders) into ``sweep.json``.
 
@@ -138,9 +142,7 @@ def _record(
             "planners": list(sweep.planners),
             "seeds": list(sweep.seeds),
             "protocols": kept
-            + [
-                {**to_dict(p), "seeds": list(point_config(p, sweep).seeds)} for p in sweep.protocols
-            ],
+            + [{**to_dict(p), "seeds": list(configs[p.name].seeds)} for p in sweep.protocols],
             "points": [
                 {
                     "label": point.label,
@@ -204,7 +206,7 @@ def run_sweep(
     }
     backends = _point_backends(sweep, params, dirs, configs, backend_factory, planners)
     root.mkdir(parents=True, exist_ok=True)
-    _record(root, sweep, params, dirs)
+    _record(root, sweep, params, dirs, configs)
     todo = list(dict.fromkeys(dirs.values()))
     summary = SweepSummary(root, {})
     start = time.perf_counter()
