@@ -21,6 +21,8 @@ seconds, ``MjData.time``). Entity paths:
 - ``world/planner/candidates/<class>``: candidates as arrows along the approach axis ending at
   P_G; ``kept`` coloured by score, the others by the rule that removed them (``width``,
   ``duplicate``, ``width``, ``support``, ``table``, ``collision``, ``sweep``).
+- ``world/planner/surface``: a planner's own surface model (the vgn and giga TSDF's zero
+  crossings), when it gives one;
 - ``world/planner/top_grasps``: outlines of the best ``top_grasps`` grasps;
   ``world/planner/chosen_grasp``: the outline of the executed one (white).
 - ``plots/gripper_width``: finger opening over time, metres.
@@ -306,6 +308,9 @@ class RerunRecorder:
         _log_superquadrics(self.rec, rr, cfg, hidden, best, self._cloud)
         if cands is not None and len(cands):
             _log_candidates(self.rec, rr, cfg, cands)
+        surface = getattr(plan, "surface_points", None)
+        if surface is not None and len(surface):  # a volumetric planner's TSDF surface
+            self.rec.log("world/planner/surface", rr.Points3D(surface, radii=cfg.cloud_radius_m))
         grasps = plan.grasps
         _log_top_grasps(self.rec, rr, cfg, self.gripper, grasps)
         removed = ", ".join(f"{k} {v}" for k, v in getattr(plan, "removed_by", {}).items() if v)

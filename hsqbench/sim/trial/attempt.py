@@ -102,6 +102,8 @@ def _plan(env: TrialEnv, planner: Any, points: Any, obs: Any, truth: Any, packed
         camera_positions=np.asarray(obs.camera_positions),
         workspace_bounds=(np.asarray(env.info.workspace_min), np.asarray(env.info.workspace_max)),
         truth=truth if getattr(planner, "privileged", False) else None,
+        scene=env.info.kind,
+        depth_views=getattr(obs, "cameras", None),
     )
     return planner.plan(points, context)
 
