@@ -24,6 +24,8 @@ The scatter mean is written with ``index_add_`` (no torch-scatter).
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import torch
 import torch.nn.functional as F
@@ -85,9 +87,11 @@ class UNet2D(nn.Module):
     def __init__(self, channels: int = FEATURE_DIM) -> None:
         super().__init__()
         ins = (channels, *UNET_FILTERS[:-1])
-        self.down_convs = nn.ModuleList(_Level(a, b) for a, b in zip(ins, UNET_FILTERS))
+        self.down_convs = nn.ModuleList(
+            _Level(a, b) for a, b in zip(ins, UNET_FILTERS, strict=True)
+        )
         ups = UNET_FILTERS[::-1]
-        self.up_convs = nn.ModuleList(_UpLevel(a, b) for a, b in zip(ups[:-1], ups[1:]))
+        self.up_convs = nn.ModuleList(_UpLevel(a, b) for a, b in itertools.pairwise(ups))
         self.conv_final = nn.Conv2d(UNET_FILTERS[0], channels, 1)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -97,7 +101,7 @@ class UNet2D(nn.Module):
             if n < len(self.down_convs) - 1:
                 skips.append(x)
                 x = F.max_pool2d(x, 2)
-        for level, skip in zip(self.up_convs, reversed(skips)):
+        for level, skip in zip(self.up_convs, reversed(skips), strict=True):
             x = level.merge(skip, x)
         return self.conv_final(x)
 
@@ -148,7 +152,7 @@ class LocalDecoder(nn.Module):
 
     def forward(self, points: torch.Tensor, feature: torch.Tensor) -> torch.Tensor:
         net = self.fc_p(points)
-        for fc_c, block in zip(self.fc_c, self.blocks):
+        for fc_c, block in zip(self.fc_c, self.blocks, strict=True):
             net = block(net + fc_c(feature))
         return self.fc_out(F.relu(net))
 

@@ -241,9 +241,12 @@ class VolumetricPlanner(PlannerBase):
             position = origins[t] + det.index * vox
             gap = np.abs(position[:, None, :2] - centres[None]).max(axis=2)
             own = np.argmin(gap, axis=1) == t
-            found.append((position[own], rotation[t][at][own], width[t][at][own] * vox,
-                          det.quality[own]))
-        position, quats, widths, scores = (np.concatenate(parts) for parts in zip(*found))
+            found.append(
+                (position[own], rotation[t][at][own], width[t][at][own] * vox, det.quality[own])
+            )
+        position, quats, widths, scores = (
+            np.concatenate(parts) for parts in zip(*found, strict=True)
+        )
         order = np.argsort(-scores, kind="stable")
         frames = grasp_frames(quats[order]) if len(order) else np.zeros((0, 3, 3))
         shift = self.config.pads_beyond_tcp_m

@@ -131,7 +131,9 @@ def load_strict(module: Any, path: Path) -> Any:
         raise WeightsError(f"{shown_path(path)} holds a {type(given).__name__}, not a state dict")
     problems = state_dict_problems(module.state_dict(), given)
     if problems:
-        shown = "; ".join(problems[:4]) + (f"; ... {len(problems) - 4} more" if len(problems) > 4 else "")
+        shown = "; ".join(problems[:4]) + (
+            f"; ... {len(problems) - 4} more" if len(problems) > 4 else ""
+        )
         raise WeightsError(
             f"{shown_path(path)} does not fit the {type(module).__name__} network "
             f"({len(problems)} difference(s): {shown})"
