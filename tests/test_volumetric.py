@@ -131,3 +131,27 @@ def test_quaternions_become_harness_grasp_frames():
     frame = volumetric.grasp_frames(np.array([[1.0, 0.0, 0.0, 0.0]]))[0]
     assert np.allclose(frame[:, 2], [0, 0, -1]) and np.allclose(frame[:, 0], [0, -1, 0])
     assert np.isclose(np.linalg.det(frame), 1.0)
+
+
+@pytest.mark.slow
+def test_a_benchmark_run_reports_their_planning_time(planner, tmp_path):
+    """One simulated trial of each through the benchmark runner: the planner's wall time per
+    observation lands in planning_time.csv, as every planner's does."""
+    import pandas as pd
+
+    from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig
+    from hsqbench.experiment.report import TIMES_CSV, write_report
+    from hsqbench.experiment.runner import run_benchmark
+
+    config = ExperimentConfig(
+        planners=(planner.name,),
+        isolated=IsolatedConfig(objects=("proc_box",), attempts_per_object=1),
+    )
+    run_benchmark(config, tmp_path / "run", experiments=("isolated",), progress=False)
+    write_report(tmp_path / "run")
+    times = pd.read_csv(tmp_path / "run" / TIMES_CSV)
+    attempts = pd.read_csv(tmp_path / "run" / "attempts.csv")
+    row = times[(times["planner"] == planner.name) & (times["experiment"] == "isolated")]
+    assert len(row) == 1 and row["n"].iloc[0] == len(attempts) >= 1
+    assert row["median_s"].iloc[0] == pytest.approx(attempts["planning_s"].median())
+    assert 0 < row["median_s"].iloc[0] < 60

@@ -120,7 +120,7 @@ class VolumetricConfig:
         default_factory=lambda: {"isolated": "packed", "packed": "packed", "pile": "pile"}
     )
     max_cubes_per_axis: int = 3
-    pads_beyond_tcp_m: float = 0.0814
+    pads_beyond_tcp_m: float = 0.041
     weights_url: str = (
         "https://raw.githubusercontent.com/supersglzc/GIGA/"
         "30efe5946cb2622c21f140b3e811f7fcce804c7b/data/models"
