@@ -3,20 +3,15 @@ outcomes and timings (definitions in :mod:`hsqbench.experiment.report`)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import pandas as pd
 
 from hsqbench.experiment.graspable import PRIVILEGED_NOTE, has_graspability
 from hsqbench.experiment.reported import CITATION, PROVENANCE
 from hsqbench.experiment.results import STATUS_ERROR
+from hsqbench.experiment.run_data import MEASURED, RunData
 from hsqbench.sim.outcome import Outcome
 
-if TYPE_CHECKING:
-    from hsqbench.experiment.report import RunData
-
-MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoCo backend
 OUTCOME_COLUMNS = (*[str(o) for o in Outcome], "error")
 
 
