@@ -37,6 +37,7 @@ from hsqbench.experiment.reported import PROVENANCE, reported_rows
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.run_data import RunData, load_run
 from hsqbench.experiment.stats import Rate, summarize_times
+from hsqbench.experiment.verdicts import verdict_sections
 
 TABLES_MD = "tables.md"
 TABLE1_CSV = "table1_isolated.csv"
@@ -248,12 +249,18 @@ def time_table(data: RunData) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) -> list[Path]:
+def write_report(
+    run_dir: str | Path, with_runs: tuple[str | Path, ...] = (), reference: str | None = None
+) -> list[Path]:
     """Write ``tables.md``, the table CSVs and the PNG plots into ``run_dir``; returns the paths.
 
     ``with_runs``: other runs of the same protocol whose further planners join the tables
-    (:mod:`hsqbench.experiment.combine`). Warns (``UserWarning``) when trials failed with
-    infrastructure errors.
+    (:mod:`hsqbench.experiment.combine`). ``reference``: the planner the paired section compares
+    every other with (default hsq; :mod:`hsqbench.experiment.verdicts`). Warns
+    (``UserWarning``) when trials failed with infrastructure errors.
+
+    Raises:
+        ValueError: ``reference`` did not run.
     """
     from hsqbench.experiment.combine import combine
 
@@ -264,6 +271,7 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
     t1, t1o, t2 = table1(data), table1_per_object(data), table2(data)
     outcomes, times = outcome_table(data), time_table(data)
     t4 = table4(data)
+    judged, judged_lines = verdict_sections(data, reference)
     written = []
     for name, df in (
         (TABLE1_CSV, t1),
@@ -271,6 +279,7 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
         (TABLE2_CSV, t2),
         (OUTCOMES_CSV, outcomes),
         (TIMES_CSV, times),
+        *judged.items(),
     ):
         df.to_csv(run_dir / name, index=False)
         written.append(run_dir / name)
@@ -278,7 +287,8 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
         t4.to_csv(run_dir / TABLE4_CSV, index=False)
         written.append(run_dir / TABLE4_CSV)
     md = run_dir / TABLES_MD
-    md.write_text(render_markdown(data, t1, t1o, t2, outcomes, times, render_table4(data, t4)))
+    after = [*render_table4(data, t4), *judged_lines]
+    md.write_text(render_markdown(data, t1, t1o, t2, outcomes, times, after))
     written.append(md)
     if not t1o.empty:
         plot_gsr_per_object(data, t1o, run_dir / GSR_PLOT)
