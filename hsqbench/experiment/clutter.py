@@ -95,7 +95,7 @@ def render_clutter(data: RunData, table: pd.DataFrame) -> list[str]:
         return []
     conf = f"{100 * data.confidence:g} %"
     out = [
-        "## Clutter metrics under VGN/GIGA's stop rule",
+        "## Clutter metrics as VGN and GIGA count them",
         "",
         "The same rounds, counted as VGN and GIGA count theirs: a round also ends at the first "
         "attempt without a grasp, which is not an attempt; declutter rate = successful grasps / "
