@@ -51,14 +51,25 @@ def isolated_pairs(data: RunData, planner: str, reference: str) -> pd.DataFrame:
 def round_pairs(data: RunData, kind: str, planner: str, reference: str) -> pd.DataFrame:
     """Columns ``round``, ``object``, ``planner``, ``reference`` (removed, bool): one row per
     object of each ``kind`` round both planners finished on the same draw."""
-    rounds = data.rounds
-    rows: list[dict[str, Any]] = []
-    if rounds.empty:
-        return pd.DataFrame(columns=["round", "object", "planner", "reference"])
-    ok = rounds[rounds["trial_key"].str.startswith(f"{kind}/") & (rounds["status"] == STATUS_OK)]
+    ok = finished_rounds(data.rounds, kind)
     key = ["base_seed", "trial_index"]
-    mine = ok[ok["planner"] == planner].set_index(key)
-    ref = ok[ok["planner"] == reference].set_index(key)
+    return object_pairs(
+        ok[ok["planner"] == planner].set_index(key), ok[ok["planner"] == reference].set_index(key)
+    )
+
+
+def finished_rounds(rounds: pd.DataFrame, kind: str) -> pd.DataFrame:
+    """The ``kind`` (packed, pile) rounds that finished without an infrastructure error."""
+    if rounds.empty:
+        return rounds
+    return rounds[rounds["trial_key"].str.startswith(f"{kind}/") & (rounds["status"] == STATUS_OK)]
+
+
+def object_pairs(mine: pd.DataFrame, ref: pd.DataFrame) -> pd.DataFrame:
+    """Per object of the rounds in both frames (indexed alike, one round a row) on the same
+    draw: removed by ``mine``'s planner, by ``ref``'s (columns ``round``, ``object``,
+    ``planner``, ``reference``)."""
+    rows: list[dict[str, Any]] = []
     for idx in mine.index.intersection(ref.index):
         a, b = mine.loc[idx], ref.loc[idx]
         if a["objects"] != b["objects"]:  # another draw: not a pair
@@ -68,7 +79,7 @@ def round_pairs(data: RunData, kind: str, planner: str, reference: str) -> pd.Da
         for obj in str(a["objects"]).split(";"):
             rows.append(
                 {
-                    "round": f"s{idx[0]}/{idx[1]}",
+                    "round": str(idx),
                     "object": obj,
                     "planner": obj in cleared_a,
                     "reference": obj in cleared_b,
