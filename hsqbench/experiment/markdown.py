@@ -38,6 +38,16 @@ def _interval(row: pd.Series, prefix: str = "") -> str:
     return f"[{low:.1f}, {high:.1f}]"
 
 
+def _seeds(meta: dict) -> str:
+    """The base seeds that ran; with ``--until-halfwidth``, why there are that many."""
+    until = meta.get("until_halfwidth")
+    if not until:
+        return str(meta.get("config", {}).get("seeds", "?"))
+    target = f"±{100 * until['target_halfwidth']:g} points"
+    why = "reached" if until["reached"] else f"not reached within the cap of {until['max_seeds']}"
+    return f"{until['seeds_run']} (added until every GSR interval was within {target}: {why})"
+
+
 def _header(data: RunData, conf: str) -> list[str]:
     """Title, config and code version, error warning and the run's notes."""
     meta = data.meta
@@ -46,7 +56,7 @@ def _header(data: RunData, conf: str) -> list[str]:
     out.append(
         f"Config `{meta.get('config_name', '?')}` (hash `{meta.get('config_hash', '?')}`), "
         f"code {', '.join(f'`{v}`' for v in versions) or '?'}, base seeds "
-        f"{meta.get('config', {}).get('seeds', '?')}. Intervals: Wilson, {conf}."
+        f"{_seeds(meta)}. Intervals: Wilson, {conf}."
     )
     out.append("")
     n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0
