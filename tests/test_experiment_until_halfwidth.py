@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
-from hsqbench.experiment.report import load_run
+from hsqbench.experiment.report import load_run, write_report
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.experiment.stats import Rate
 from hsqbench.experiment.until_halfwidth import run_until_halfwidth, seed_sequence
@@ -79,9 +79,7 @@ def test_a_target_outside_zero_to_half_is_an_error(tmp_path: Path) -> None:
 
 
 def test_the_report_names_the_seeds_that_ran_and_why(tmp_path: Path) -> None:
-    from hsqbench.experiment.report import write_report
-
-    run_dir, steps, _ = _steps(tmp_path, target=0.01, max_seeds=2)
+    run_dir, _, _ = _steps(tmp_path, target=0.01, max_seeds=2)
     write_report(run_dir)
     md = (run_dir / "tables.md").read_text()
     assert "base seeds [5, 0] (added until every GSR interval was within ±1 points: not " in md
