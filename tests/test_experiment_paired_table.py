@@ -109,3 +109,13 @@ def test_a_run_without_the_reference_says_so(run_dir: Path, tmp_path: Path) -> N
     tables, lines = verdict_sections(data)
     assert PAIRED_CSV not in tables
     assert any("reference planner hsq did not run here" in x for x in lines)
+
+
+def test_report_command_takes_the_reference(run_dir: Path, capsys) -> None:
+    from hsqbench.cli import main
+
+    assert main(["report", str(run_dir), "--reference", "single-sq"]) == 0
+    md = (run_dir / TABLES_MD).read_text()
+    assert "| isolated GSR | hsq vs single-sq |" in md
+    assert main(["report", str(run_dir), "--reference", "gpd"]) == 2
+    assert "--reference gpd: no rows of that planner" in capsys.readouterr().err
