@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hsqbench.superquadric_math import EPS_MAX, EPS_MIN, _phi, _phi_ratios, as_points
+from hsqbench.superquadric.primitives import EPS_MAX, EPS_MIN, _phi, _phi_ratios, as_points
 
 #: Curvature is evaluated at least this far (in units of the semi-axes) from the planes of the local
 #: axes. For eps > 1 the curvature at an axis endpoint is unbounded, so the value there is the one

@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from hsqbench.superquadric_math import as_points
-
-if TYPE_CHECKING:
-    from hsqbench.superquadric import Superquadric
+from hsqbench.superquadric.geometry import Superquadric
+from hsqbench.superquadric.primitives import as_points
 
 
 def _fit_inputs(points: ArrayLike, d_th: float | None = None) -> NDArray[np.float64]:

@@ -16,15 +16,14 @@ intermediate. G is homogeneous of degree 2 in p, so the surface radius along a d
 ``1 / sqrt(G(n))`` and the radial distance is ``| |p| - |p| / sqrt(G(p)) |``. ``rho = sqrt(G)`` is
 a nested lp norm of the scaled point (p = 2/eps >= 1), so every superquadric with eps <= 2 is convex.
 
-Besides the implicit function the module gives what the planner needs per superquadric: an even
+Besides the implicit function the class gives what the planner needs per superquadric: an even
 surface sampling with outward normals (:meth:`Superquadric.sample_surface`, in
-:mod:`hsqbench.superquadric_sampling`), analytic Gaussian curvature
-(:meth:`Superquadric.gaussian_curvature`, :func:`gaussian_curvature_local` row-wise, in
-:mod:`hsqbench.superquadric_curvature`), the paper's fit measures alpha and beta (:func:`alpha_beta`,
-:func:`point_to_surface_alpha`, :func:`coverage_beta`, in :mod:`hsqbench.superquadric_fit`), a
-watertight mesh (:meth:`Superquadric.to_mesh`, in :mod:`hsqbench.superquadric_mesh`) and the
-closed-form volume. The overflow-free primitives live in :mod:`hsqbench.superquadric_math`; every
-name stays importable from here.
+:mod:`hsqbench.superquadric.sampling`), analytic Gaussian curvature
+(:meth:`Superquadric.gaussian_curvature`; row-wise over many superquadrics in
+:mod:`hsqbench.superquadric.curvature`), a watertight mesh (:meth:`Superquadric.to_mesh`, in
+:mod:`hsqbench.superquadric.mesh`) and the closed-form volume. The overflow-free primitives live in
+:mod:`hsqbench.superquadric.primitives`; the paper's fit measures alpha and beta, which sample a
+superquadric, in :mod:`hsqbench.superquadric.fit`.
 """
 
 from __future__ import annotations
@@ -37,29 +36,13 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 from scipy.special import betaln
 
-from hsqbench.superquadric_curvature import CURVATURE_AXIS_OFFSET, gaussian_curvature_local
-from hsqbench.superquadric_fit import alpha_beta, coverage_beta, point_to_surface_alpha
-from hsqbench.superquadric_math import EPS_MAX, EPS_MIN, _phi, _phi_ratios, as_points
-from hsqbench.superquadric_mesh import _surface_mesh
-from hsqbench.superquadric_sampling import MAX_SAMPLE_NODES, _sample_surface
+from hsqbench.superquadric.curvature import gaussian_curvature_local
+from hsqbench.superquadric.mesh import _surface_mesh
+from hsqbench.superquadric.primitives import EPS_MAX, EPS_MIN, _phi, _phi_ratios, as_points
+from hsqbench.superquadric.sampling import _sample_surface
 
 if TYPE_CHECKING:
     import trimesh
-
-__all__ = [
-    "CURVATURE_AXIS_OFFSET",
-    "EPS_MAX",
-    "EPS_MIN",
-    "MAX_SAMPLE_NODES",
-    "N_PARAMS",
-    "Superquadric",
-    "_phi",
-    "alpha_beta",
-    "as_points",
-    "coverage_beta",
-    "gaussian_curvature_local",
-    "point_to_surface_alpha",
-]
 
 #: Largest finite F returned; beyond this a point is "infinitely" outside.
 _LOG_F_MAX = 700.0

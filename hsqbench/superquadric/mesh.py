@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.superquadric_math import _quarter_curve
-
-if TYPE_CHECKING:
-    from hsqbench.superquadric import Superquadric
+from hsqbench.superquadric.primitives import SurfaceShape, _quarter_curve
 
 
 def _surface_mesh(
-    sq: Superquadric, n_quarter: int
+    sq: SurfaceShape, n_quarter: int
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """:meth:`Superquadric.to_mesh` (documented there): rings of equal arc-length steps, two poles."""
     n = int(n_quarter)

@@ -6,6 +6,8 @@ See :mod:`hsqbench.superquadric` for the formulas: ``phi`` evaluates ``(u^(1/t) 
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -64,3 +66,20 @@ def as_points(points: ArrayLike, name: str = "points") -> NDArray[np.float64]:
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"{name} must have shape (N, 3), got {arr.shape}")
     return arr
+
+
+class SurfaceShape(Protocol):
+    """What the sampling and mesh helpers read of a superquadric: shape, pose and the
+    inside-outside function. :class:`~hsqbench.superquadric.geometry.Superquadric` calls those
+    helpers, so they name this interface rather than the class: imports go one way."""
+
+    eps1: float
+    eps2: float
+    scale: NDArray[np.float64]
+    rotation: NDArray[np.float64]
+
+    def inside_outside_pow(self, points: ArrayLike, local: bool = False) -> NDArray[np.float64]: ...
+
+    def to_world(self, points: ArrayLike) -> NDArray[np.float64]: ...
+
+    def _rho_gradient(self, local: NDArray) -> NDArray[np.float64]: ...

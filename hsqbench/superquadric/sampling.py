@@ -1,21 +1,16 @@
 """Even surface sampling of a superquadric: six face grids, seam thinning and hole filling.
 
-The algorithm is documented on :meth:`hsqbench.superquadric.Superquadric.sample_surface`, which calls
+The algorithm is documented on :meth:`hsqbench.superquadric.geometry.Superquadric.sample_surface`, which calls
 :func:`_sample_surface` here.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from hsqbench.superquadric_math import _phi, _quarter_curve
-
-if TYPE_CHECKING:
-    from hsqbench.superquadric import Superquadric
+from hsqbench.superquadric.primitives import SurfaceShape, _phi, _quarter_curve
 
 #: Upper bound on the candidate grid nodes of :meth:`Superquadric.sample_surface` (memory guard).
 MAX_SAMPLE_NODES = 2_000_000
@@ -79,7 +74,7 @@ def _greedy_thinning(
 
 
 def _face_grid_nodes(
-    sq: Superquadric, spacing: float
+    sq: SurfaceShape, spacing: float
 ) -> dict[tuple[int, int], NDArray[np.float64]]:
     """Node coordinates along local axis ``m`` for the face grid of ``axis``, keyed ``(m, axis)``.
 
@@ -101,7 +96,7 @@ def _face_grid_nodes(
     return nodes
 
 
-def _face_height(sq: Superquadric, axis: int, coords: NDArray) -> tuple[NDArray, NDArray[np.bool_]]:
+def _face_height(sq: SurfaceShape, axis: int, coords: NDArray) -> tuple[NDArray, NDArray[np.bool_]]:
     """Non-negative coordinate along ``axis`` of the surface above local ``coords`` (N, 3) whose
     ``axis`` column is ignored; second output flags nodes inside the footprint."""
     e1, e2 = sq.eps1, sq.eps2
@@ -120,7 +115,7 @@ def _face_height(sq: Superquadric, axis: int, coords: NDArray) -> tuple[NDArray,
 
 
 def _face_candidates(
-    sq: Superquadric, axis: int, nodes_i: NDArray, nodes_j: NDArray
+    sq: SurfaceShape, axis: int, nodes_i: NDArray, nodes_j: NDArray
 ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Grid nodes of the two faces of ``axis`` (+ and -) lifted onto the surface.
 
@@ -158,7 +153,7 @@ def _face_candidates(
 
 
 def _sample_surface(
-    sq: Superquadric, spacing: float
+    sq: SurfaceShape, spacing: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """:meth:`Superquadric.sample_surface` (documented there) for a validated ``spacing``."""
     grid = _face_grid_nodes(sq, spacing)

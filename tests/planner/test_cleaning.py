@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from hsqbench.planner import plan_grasps
-from hsqbench.planner.api import resolve_config
 from hsqbench.planner.cleaning import CleaningConfig, clean_cloud, isolated_mask
+from hsqbench.planner.hsq.config import resolve_config
 from tests.shapes import Box, Cylinder, union_cloud
 
 CAMERA = np.array([0.62, 0.78, 0.55])

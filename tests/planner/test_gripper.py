@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hsqbench.config import ConfigError, from_dict
+from hsqbench.config import from_dict
+from hsqbench.errors import ConfigError
 from hsqbench.planner.gripper import GripperModel, load_gripper
 
 

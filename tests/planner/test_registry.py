@@ -2,11 +2,21 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import hsqbench.planner.learned.network as network
 from hsqbench.experiment.backend import SimBackend
-from hsqbench.planner.registry import PRIVILEGED, planner_names, runnable, unavailable
+from hsqbench.planner.api import Planner, PlanningContext, PlanResult
+from hsqbench.planner.hsq.planner import HSQPlanner
+from hsqbench.planner.registry import (
+    PRIVILEGED,
+    get_planner,
+    planner_names,
+    register_planner,
+    runnable,
+    unavailable,
+)
 
 
 def test_builtin_planners_are_registered_and_the_oracle_is_privileged():
@@ -35,3 +45,22 @@ def test_runnable_leaves_out_planners_without_their_extra_and_says_why(monkeypat
     assert "leaving out planner contact-graspnet" in capsys.readouterr().err
     monkeypatch.setattr(network, "available", lambda: True)
     assert runnable(["hsq", "contact-graspnet"]) == ["hsq", "contact-graspnet"]
+
+
+def test_registry_builds_planners_by_name() -> None:
+    assert "hsq" in planner_names()
+    planner = get_planner("hsq")
+    assert isinstance(planner, HSQPlanner) and isinstance(planner, Planner)
+    with pytest.raises(ValueError, match=r"choose one of: .*hsq"):
+        get_planner("no-such-planner")
+
+    class Nothing:
+        name = "nothing"
+
+        def plan(self, points, context) -> PlanResult:
+            return PlanResult(grasps=[], reason="never plans", planner=self.name)
+
+    register_planner("test-nothing", lambda config=None: Nothing(), replace=True)
+    assert get_planner("test-nothing").plan(np.zeros((5, 3)), PlanningContext()).reason
+    with pytest.raises(ValueError, match="already registered"):
+        register_planner("test-nothing", lambda config=None: Nothing())

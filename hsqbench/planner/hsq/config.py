@@ -2,7 +2,7 @@
 
 Three sections: ``cleaning`` (before both stages, :mod:`hsqbench.planner.cleaning`), ``recovery``
 (stage one) and ``grasp`` (stage two), and ``additions``: one switch per addition of ours to the
-paper (:mod:`hsqbench.planner.additions`); a switch that is off sets the paper's values in its
+paper (:mod:`hsqbench.planner.hsq.additions`); a switch that is off sets the paper's values in its
 section. Every default here is mirrored, with its reason, in ``configs/planner.yaml``.
 """
 
@@ -12,20 +12,20 @@ import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from hsqbench.config import load_config
-from hsqbench.planner.additions import ADDITIONS, AdditionsConfig
+from hsqbench.config import load_cached, load_config
 from hsqbench.planner.cleaning import CleaningConfig
+from hsqbench.planner.hsq.additions import ADDITIONS, AdditionsConfig
 
 
 @dataclass(frozen=True)
 class RecoveryConfig:
-    """Stage one: hidden superquadric recovery (owned by ``hsqbench.planner.recovery``).
+    """Stage one: hidden superquadric recovery (owned by ``hsqbench.planner.hsq.stage_one.recovery``).
 
     Lengths in metres; weights and probabilities dimensionless. Reasons for each default are in
     the ``recovery:`` section of ``configs/planner.yaml``.
     """
 
-    # Packed scenes: one stage one per object (hsqbench.planner.clusters).
+    # Packed scenes: one stage one per object (hsqbench.planner.hsq.stage_one.clusters).
     split_objects: bool = True
     cluster_distance_m: float = 0.01
     cluster_voxel_m: float = 0.005
@@ -118,7 +118,7 @@ class RecoveryConfig:
 
 @dataclass(frozen=True)
 class GraspConfig:
-    """Stage two: grasp synthesis, elimination and scoring (``hsqbench.planner.synthesis``,
+    """Stage two: grasp synthesis, elimination and scoring (``hsqbench.planner.hsq.stage_two.synthesis``,
     ``elimination``, ``scoring``).
 
     Lengths in metres, angles in degrees, the q's as in the paper. Reasons for each default are in
@@ -245,3 +245,13 @@ class PlannerConfig:
 def load_planner_config(path: str | Path | None = "planner") -> PlannerConfig:
     """Load ``configs/planner.yaml`` (or another file); ``None`` gives the built-in defaults."""
     return load_config(PlannerConfig, path)
+
+
+def resolve_config(config: PlannerConfig | str | Path | None) -> PlannerConfig:
+    """A :class:`PlannerConfig` from an instance, a config name or path; None -> planner.yaml.
+
+    Files are parsed once per modification time (planning many clouds re-reads nothing).
+    """
+    if isinstance(config, PlannerConfig):
+        return config
+    return load_cached(load_planner_config, "planner" if config is None else config)

@@ -10,9 +10,10 @@ import pytest
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from hsqbench.config import ConfigError, from_dict, load_config, to_dict
+from hsqbench.config import from_dict, load_config, to_dict
+from hsqbench.errors import ConfigError
 from hsqbench.planner import plan_grasps
-from hsqbench.planner.api import Planner, PlanningContext, resolve_config
+from hsqbench.planner.api import Planner, PlanningContext
 from hsqbench.planner.baselines.antipodal import AntipodalPlanner, plan_antipodal
 from hsqbench.planner.baselines.config import (
     AntipodalConfig,
@@ -20,13 +21,14 @@ from hsqbench.planner.baselines.config import (
     load_baselines_config,
 )
 from hsqbench.planner.baselines.single_sq import SingleSQPlanner, plan_single_sq
-from hsqbench.planner.candidates import CandidateSet
 from hsqbench.planner.cleaning import clean_cloud
-from hsqbench.planner.elimination import eliminate, unobservable_contacts
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.hidden_bodies import body_obstacles
+from hsqbench.planner.hsq.config import resolve_config
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet
+from hsqbench.planner.hsq.stage_two.elimination import eliminate, unobservable_contacts
+from hsqbench.planner.hsq.stage_two.hidden_bodies import body_obstacles
 from hsqbench.planner.registry import get_planner
-from hsqbench.superquadric import point_to_surface_alpha
+from hsqbench.superquadric.fit import point_to_surface_alpha
 from tests.shapes import Box, l_of_two_boxes, union_cloud, visible_mask
 
 TABLE = (0.0, 0.0, 1.0, 0.0)
@@ -112,7 +114,7 @@ def test_bad_settings_are_refused_by_name(override, needle) -> None:
 
 
 def test_a_planner_config_object_is_refused_with_a_hint() -> None:
-    from hsqbench.planner.config import PlannerConfig
+    from hsqbench.planner.hsq.config import PlannerConfig
 
     with pytest.raises(TypeError, match="'planner' entry"):
         get_planner("antipodal", PlannerConfig())

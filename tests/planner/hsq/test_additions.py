@@ -9,22 +9,36 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hsqbench.config import ConfigError, from_dict
-from hsqbench.planner.additions import ADDITIONS, AdditionsConfig, ablation_planners, all_off
-from hsqbench.planner.api import HSQPlanner, PlanningContext, plan_from_hidden
-from hsqbench.planner.candidates import CandidateSet, ClosingLines
+from hsqbench.config import from_dict
+from hsqbench.errors import ConfigError
+from hsqbench.planner.api import PlanningContext
 from hsqbench.planner.cleaning import clean_cloud
-from hsqbench.planner.config import PlannerConfig, load_planner_config
-from hsqbench.planner.elimination import eliminate, support_kappa
-from hsqbench.planner.recovery import (
+from hsqbench.planner.hsq.additions import ADDITIONS, AdditionsConfig, ablation_planners, all_off
+from hsqbench.planner.hsq.config import PlannerConfig, load_planner_config
+from hsqbench.planner.hsq.planner import HSQPlanner
+from hsqbench.planner.hsq.stage_one.recovery import (
     fit_superquadric,
     recover_hidden_superquadrics,
     surface_spacing,
 )
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet, ClosingLines
+from hsqbench.planner.hsq.stage_two.elimination import eliminate, support_kappa
+from hsqbench.planner.hsq.stage_two.plan import plan_from_hidden
+from hsqbench.planner.hsq.stage_two.synthesis import synthesize
+from hsqbench.planner.hsq.stage_two.table_lines import LEVELLED, PINCHED, level_table_lines
 from hsqbench.planner.registry import get_planner, planner_names
-from hsqbench.planner.synthesis import synthesize
-from hsqbench.planner.table_lines import LEVELLED, PINCHED, level_table_lines
-from hsqbench.superquadric import Superquadric
+from hsqbench.superquadric.geometry import Superquadric
+from tests.planner.baselines.test_baselines import two_boxes_apart
+from tests.planner.hsq.stage_two.test_elimination import (
+    GRIPPER,
+    ROLLS,
+    one_line,
+    patch,
+    reasons,
+    two_faces,
+)
+from tests.planner.hsq.stage_two.test_table_lines import lying_bar
+from tests.planner.hsq.test_planner import CAMERAS, seen
 from tests.shapes import (
     Box,
     mug_with_handle,
@@ -32,10 +46,6 @@ from tests.shapes import (
     superquadric_cloud,
     union_cloud,
 )
-from tests.test_api import CAMERAS, seen
-from tests.test_baselines import two_boxes_apart
-from tests.test_elimination import GRIPPER, ROLLS, one_line, patch, reasons, two_faces
-from tests.test_table_lines import lying_bar
 
 TABLE = np.array([0.0, 0.0, 1.0, 0.0])
 BEHIND = np.array([[0.6, 0.3, 0.3], [0.6, -0.3, 0.3]])  # cameras on the +x side

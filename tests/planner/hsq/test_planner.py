@@ -1,4 +1,5 @@
-"""The planner API end to end: known shapes on a table, seen by two side cameras."""
+"""The hsq planner (hsqbench.planner.hsq.planner) end to end: known shapes on a table, seen by two
+side cameras."""
 
 from __future__ import annotations
 
@@ -9,20 +10,16 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from hsqbench.config import ConfigError, from_dict
+from hsqbench.config import from_dict
+from hsqbench.errors import ConfigError
 from hsqbench.planner import plan_grasps
-from hsqbench.planner.api import (
-    HSQPlanner,
-    Planner,
-    PlanningContext,
-    PlanResult,
-    plan_from_hidden,
-    redraw_seed,
-)
-from hsqbench.planner.config import PlannerConfig
+from hsqbench.planner.api import PlanningContext, PlanResult
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.registry import get_planner, planner_names, register_planner
-from hsqbench.superquadric import Superquadric, alpha_beta
+from hsqbench.planner.hsq.config import PlannerConfig
+from hsqbench.planner.hsq.planner import HSQPlanner, redraw_seed
+from hsqbench.planner.hsq.stage_two.plan import plan_from_hidden
+from hsqbench.superquadric.fit import alpha_beta
+from hsqbench.superquadric.geometry import Superquadric
 from tests.shapes import Box, Cylinder, mug_with_handle, union_cloud, visible_mask
 
 TABLE = (0.0, 0.0, 1.0, 0.0)
@@ -258,34 +255,6 @@ def test_bad_clouds_are_refused(points, needle) -> None:
         plan_grasps(points)
 
 
-def test_planning_context_normalises_and_checks_the_plane() -> None:
-    ctx = PlanningContext(support_plane=(0.0, 0.0, 2.0, -0.2))
-    assert ctx.support_plane == pytest.approx((0.0, 0.0, 1.0, -0.1))
-    with pytest.raises(ValueError, match="zero"):
-        PlanningContext(support_plane=(0.0, 0.0, 0.0, 1.0))
-    with pytest.raises(ValueError, match="4 finite"):
-        PlanningContext(support_plane=(0.0, 1.0))
-
-
-def test_registry_builds_planners_by_name() -> None:
-    assert "hsq" in planner_names()
-    planner = get_planner("hsq")
-    assert isinstance(planner, HSQPlanner) and isinstance(planner, Planner)
-    with pytest.raises(ValueError, match=r"choose one of: .*hsq"):
-        get_planner("no-such-planner")
-
-    class Nothing:
-        name = "nothing"
-
-        def plan(self, points, context) -> PlanResult:
-            return PlanResult(grasps=[], reason="never plans", planner=self.name)
-
-    register_planner("test-nothing", lambda config=None: Nothing(), replace=True)
-    assert get_planner("test-nothing").plan(np.zeros((5, 3)), PlanningContext()).reason
-    with pytest.raises(ValueError, match="already registered"):
-        register_planner("test-nothing", lambda config=None: Nothing())
-
-
 def test_hsq_planner_uses_the_context() -> None:
     box = yawed_box(30.0)
     points = seen([box], seed=6)
@@ -320,34 +289,6 @@ def test_contacts_no_camera_sees_need_no_support() -> None:
         plan_grasps(points, camera_positions=[1.0, 2.0])
 
 
-def test_every_cloud_planner_goes_through_the_one_front_door() -> None:
-    """hsq and the baselines share PlannerBase's plan (validate, clean, time, assemble) and
-    supply only their stages; the function forms take the context's keywords; a cloud that
-    cleaning empties gets the same answer from each, under its own name."""
-    import inspect
-
-    from hsqbench.planner.base import PlannerBase
-    from hsqbench.planner.baselines.antipodal import AntipodalPlanner, plan_antipodal
-    from hsqbench.planner.baselines.single_sq import SingleSQPlanner, plan_single_sq
-
-    for cls in (HSQPlanner, SingleSQPlanner, AntipodalPlanner):
-        assert issubclass(cls, PlannerBase) and "plan" not in vars(cls), cls.__name__
-    keywords = {"packed", "support_plane", "seed", "camera_positions"}
-    for fn in (plan_grasps, plan_single_sq, plan_antipodal):
-        assert keywords <= set(inspect.signature(fn).parameters), fn.__name__
-    scattered = np.arange(15, dtype=float).reshape(5, 3)  # five points metres apart: outliers
-    context = PlanningContext(support_plane=(0, 0, 1, 0), seed=3)
-    results = [
-        cls().plan(scattered, context) for cls in (HSQPlanner, SingleSQPlanner, AntipodalPlanner)
-    ]
-    assert [r.planner for r in results] == ["hsq", "single-sq", "antipodal"]
-    for r in results:
-        assert not r.grasps and r.n_removed == 5 and list(r.timings) == ["cleaning", "total"]
-        assert r.reason == results[0].reason and r.reason
-    with pytest.raises(ValueError, match="NaN"):
-        SingleSQPlanner().plan(np.full((4, 3), np.nan), context)
-
-
 def test_redraw_seeds_are_reproducible_and_distinct() -> None:
     assert redraw_seed(7, 0) == 7 and redraw_seed(None, 0) is None
     seeds = [redraw_seed(7, k) for k in (1, 2, 3)]
@@ -361,7 +302,7 @@ def test_redraw_seeds_are_reproducible_and_distinct() -> None:
 def test_no_grasp_redraws_stage_one_until_a_grasp_survives(
     monkeypatch, redraws: int, grasps_on_draw: int, draws: int
 ) -> None:
-    import hsqbench.planner.api as api
+    import hsqbench.planner.hsq.planner as hsq_planner
 
     planner = HSQPlanner()
     planner.config = dataclasses.replace(
@@ -380,7 +321,7 @@ def test_no_grasp_redraws_stage_one_until_a_grasp_survives(
         return PlanResult(grasps=["a grasp"] if found else [], reason="" if found else "none")
 
     monkeypatch.setattr(planner, "_recover", recover)
-    monkeypatch.setattr(api, "plan_in_context", stage_two)
+    monkeypatch.setattr(hsq_planner, "plan_in_context", stage_two)
     cloud = np.random.default_rng(0).normal(scale=0.01, size=(3000, 3))
     result = planner.plan(cloud, PlanningContext(seed=5))
     assert seeds == [redraw_seed(5, k) for k in range(draws)]

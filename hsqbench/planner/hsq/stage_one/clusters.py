@@ -4,7 +4,7 @@ Packed scenes place objects apart (``scene.yaml`` ``placement.margin_m``), so th
 object are linked by chains of neighbours closer than ``cluster_distance_m`` and two objects'
 are not. Stage one then runs on each object's points as it would on an isolated object: one
 whole-object fit and K parts by the paper's rule each, instead of one fit around the scene and
-K parts shared by five objects (``hsq``, :mod:`hsqbench.planner.api`); ``single-sq`` fits one
+K parts shared by five objects (``hsq``, :mod:`hsqbench.planner.hsq.planner`); ``single-sq`` fits one
 superquadric per cluster. Touching objects stay one cluster, which is the unsplit case.
 """
 
@@ -16,8 +16,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from hsqbench.planner.config import RecoveryConfig
 from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.planner.hsq.config import RecoveryConfig
 
 
 def object_clusters(cloud: NDArray[np.float64], config: RecoveryConfig) -> list[NDArray[np.int64]]:

@@ -3,7 +3,7 @@
 Model (Liu et al., CVPR 2022, adopted by the paper): a point is an outlier with probability
 ``w_o``, uniform over the workspace volume V (density 1/V), or an inlier drawn from an isotropic
 Gaussian of std sigma around the surface, measured by the scaled radial distance ``d``
-(:mod:`hsqbench.planner.radial`). The paper infers the same model with the optimisation-based
+(:mod:`hsqbench.planner.hsq.stage_one.radial`). The paper infers the same model with the optimisation-based
 Gibbs sampler of Wu et al. (ECCV 2022); we use EM, its deterministic counterpart. Points carry
 weights ``c_i``, the number of input points a voxel centroid stands for.
 
@@ -49,8 +49,8 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.planner.config import RecoveryConfig
-from hsqbench.planner.radial import (
+from hsqbench.planner.hsq.config import RecoveryConfig
+from hsqbench.planner.hsq.stage_one.radial import (
     Evaluation,
     SQState,
     apply_increment,

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.superquadric import Superquadric
+from hsqbench.superquadric.geometry import Superquadric
 
 Array = NDArray[np.float64]
 

@@ -17,7 +17,7 @@ Both voxel-downsample the cloud first (:mod:`.downsample`; each centroid weighs 
 it replaces, so sparse outliers keep their share) and map results back to the caller's points: a
 point takes the inlier posterior of its voxel's centroid, the point the model was fitted to, so
 ``inliers`` and ``inlier_probability`` index the input array. Defaults: ``configs/planner.yaml``,
-section ``recovery``, mirrored by :class:`hsqbench.planner.config.RecoveryConfig`.
+section ``recovery``, mirrored by :class:`hsqbench.planner.hsq.config.RecoveryConfig`.
 """
 
 from __future__ import annotations
@@ -28,17 +28,19 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hsqbench.planner.config import RecoveryConfig
 from hsqbench.planner.downsample import (
     Downsampled,
     count_voxels,
     downsample_to_budget,
     voxel_downsample,
 )
-from hsqbench.planner.ems import EMSResult, MixtureModel, ems_fit
-from hsqbench.planner.radial import SQState, radial_residual
-from hsqbench.planner.seeds import inertia_ellipsoid, kmeans_labels, paper_k
-from hsqbench.superquadric import N_PARAMS, Superquadric, alpha_beta, as_points
+from hsqbench.planner.hsq.config import RecoveryConfig
+from hsqbench.planner.hsq.stage_one.ems import EMSResult, MixtureModel, ems_fit
+from hsqbench.planner.hsq.stage_one.radial import SQState, radial_residual
+from hsqbench.planner.hsq.stage_one.seeds import inertia_ellipsoid, kmeans_labels, paper_k
+from hsqbench.superquadric.fit import alpha_beta
+from hsqbench.superquadric.geometry import N_PARAMS, Superquadric
+from hsqbench.superquadric.primitives import as_points
 
 Array = NDArray[np.float64]
 

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from sklearn.cluster import KMeans
 from threadpoolctl import ThreadpoolController
 
-from hsqbench.planner.radial import SQState
+from hsqbench.planner.hsq.stage_one.radial import SQState
 
 Array = NDArray[np.float64]
 

@@ -51,7 +51,7 @@ whole finger volume to check, and no wider opening reaches into neighbours or th
    E.g. a body no camera sees, beside a finger that grips a thin part in front of it.
 6. ``hidden`` (addition, ``body_rule``): the same test against obstacle points that model what
    no camera saw: the surfaces of the hidden superquadrics, shrunk by ``body_margin_m``, less
-   the samples a camera saw through (:mod:`~hsqbench.planner.hidden_bodies`). E.g. a body
+   the samples a camera saw through (:mod:`~hsqbench.planner.hsq.stage_two.hidden_bodies`). E.g. a body
    behind a handle that hides it from the cameras, where the cloud holds no point. Only
    planners with superquadrics pass such points (``body_points``); for the others the rule
    removes nothing.
@@ -62,8 +62,8 @@ point is inside a box at roll ``phi`` iff ``s`` is within the box's extent along
 and ``psi = theta - phi`` satisfies ``r cos(psi) in [z_lo, z_hi]`` and ``|r sin(psi)| <= y_half``:
 at most four arcs of ``phi``, which mark the discrete rolls they contain.
 
-The rules' geometry lives in :mod:`~hsqbench.planner.support` (rule 2),
-:mod:`~hsqbench.planner.roll_collisions` (rules 4 and 5) and :mod:`~hsqbench.planner.line_frame`;
+The rules' geometry lives in :mod:`~hsqbench.planner.hsq.stage_two.support` (rule 2),
+:mod:`~hsqbench.planner.hsq.stage_two.roll_collisions` (rules 4 and 5) and :mod:`~hsqbench.planner.hsq.stage_two.line_frame`;
 their public names stay importable from here.
 """
 
@@ -76,18 +76,18 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from hsqbench.planner.candidates import (
+from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import (
     KEPT,
     REJECTION_REASONS,
     CandidateSet,
     ClosingLines,
     roll_frames,
 )
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.downsample import voxel_downsample
-from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.roll_collisions import body_hits
-from hsqbench.planner.support import (
+from hsqbench.planner.hsq.stage_two.roll_collisions import body_hits
+from hsqbench.planner.hsq.stage_two.support import (
     SupportStats,
     cloud_spacing,
     support_kappa,
@@ -269,7 +269,7 @@ def eliminate(
     ``line_priority`` (L,) decides which of duplicate lines stays (higher wins; default: the
     first); the planner passes ``h_alpha h_beta`` of each line's superquadric.
     ``camera_positions`` (C, 3): with them, a contact no camera can see needs no support (rule 2).
-    ``body_points`` (M, 3): rule 6's obstacles (:func:`~hsqbench.planner.hidden_bodies.
+    ``body_points`` (M, 3): rule 6's obstacles (:func:`~hsqbench.planner.hsq.stage_two.hidden_bodies.
     body_obstacles`), or a function returning them, called only if a candidate reaches rule 6;
     None: the rule removes nothing.
     """

@@ -22,9 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import minimum_filter
 
-from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.superquadric.geometry import Superquadric
 
 #: Cells of one camera's depth buffer at most; a larger footprint gets coarser cells.
 _MAX_CELLS = 4_000_000

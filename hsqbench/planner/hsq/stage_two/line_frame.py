@@ -1,6 +1,6 @@
 """Cloud points in the frame of each closing line, computed in chunks of lines.
 
-Shared by the support and collision rules of :mod:`hsqbench.planner.elimination`.
+Shared by the support and collision rules of :mod:`hsqbench.planner.hsq.stage_two.elimination`.
 """
 
 from __future__ import annotations

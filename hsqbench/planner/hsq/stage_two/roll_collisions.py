@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.planner.candidates import CandidateSet
-from hsqbench.planner.line_frame import _chunks, _line_coordinates
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet
+from hsqbench.planner.hsq.stage_two.line_frame import _chunks, _line_coordinates
 
 #: Slack, in roll steps, when deciding whether a discrete roll lies in an arc (favours collision;
 #: covers the float32 rounding of the angles, about 1e-7 rad).

@@ -25,10 +25,11 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.planner.candidates import KEPT, CandidateSet, ClosingLines
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.shape_rows import ShapeRows
-from hsqbench.superquadric import Superquadric, gaussian_curvature_local
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import KEPT, CandidateSet, ClosingLines
+from hsqbench.planner.hsq.stage_two.shape_rows import ShapeRows
+from hsqbench.superquadric.curvature import gaussian_curvature_local
+from hsqbench.superquadric.geometry import Superquadric
 
 FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")
 #: The raw measures behind the factors: alpha (m), beta, gamma (dimensionless), delta (m).

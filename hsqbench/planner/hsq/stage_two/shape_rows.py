@@ -15,7 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 # _phi is the superquadric module's overflow-free power sum; its t may be an array.
-from hsqbench.superquadric import Superquadric, _phi
+from hsqbench.superquadric.geometry import Superquadric
+from hsqbench.superquadric.primitives import _phi
 
 #: Bisection steps for contact distances: 2^-40 of the superquadric's size, far below noise.
 _BISECTION_STEPS = 40

@@ -1,6 +1,6 @@
 """The support rule of elimination (rule 2): points at each contact, their plane, unseen contacts.
 
-See :mod:`hsqbench.planner.elimination` for the rule; this module counts what each contact's
+See :mod:`hsqbench.planner.hsq.stage_two.elimination` for the rule; this module counts what each contact's
 support cylinder holds and decides which contacts no camera can see.
 """
 
@@ -12,9 +12,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from hsqbench.planner.candidates import CandidateSet
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.line_frame import _chunks, _line_coordinates
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet
+from hsqbench.planner.hsq.stage_two.line_frame import _chunks, _line_coordinates
 
 #: Query points used to estimate the cloud's spacing (a seeded subset is as good as all).
 _SPACING_SAMPLES = 2000

@@ -34,10 +34,10 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.planner.candidates import CandidateSet, ClosingLines
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.shape_rows import ShapeRows
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet, ClosingLines
+from hsqbench.planner.hsq.stage_two.shape_rows import ShapeRows
+from hsqbench.superquadric.geometry import Superquadric
 
 #: Candidate families, as recorded in ``ClosingLines.family``.
 FAMILIES = ("axis", "slide", "rotate", "rotate+slide")

@@ -21,7 +21,7 @@ found again on its superquadric (both ways from the raised point, so ``P_G`` is 
 ``approach0`` becomes the downward normal, so roll 0 is the straight top-down approach. The
 repaired line replaces the original (family ``levelled``) if it is still antipodal: its start
 inside the superquadric and the surface normal at both contacts within ``max_tilt_deg`` of the
-line, the test the paper's moved lines pass (:mod:`hsqbench.planner.synthesis`). Every rule of
+line, the test the paper's moved lines pass (:mod:`hsqbench.planner.hsq.stage_two.synthesis`). Every rule of
 elimination then runs on it as on any line.
 
 Pinch (``pinch_max_lift_m``): a part thinner than twice the fingertips' clearance (12 mm above
@@ -38,12 +38,12 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.planner.candidates import CandidateSet
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.elimination import approach_openings, line_boxes, table_clear
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.shape_rows import ShapeRows
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet
+from hsqbench.planner.hsq.stage_two.elimination import approach_openings, line_boxes, table_clear
+from hsqbench.planner.hsq.stage_two.shape_rows import ShapeRows
+from hsqbench.superquadric.geometry import Superquadric
 
 #: Family names of a repaired line (``ClosingLines.family``, ``Grasp.family``): levelled and
 #: lifted, or levelled with only the hand lifted (a pinch, module docstring).

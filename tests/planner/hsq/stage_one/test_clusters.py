@@ -1,16 +1,18 @@
-"""Objects of a packed scene (hsqbench.planner.clusters), and hsq's stage one on each of them."""
+"""Objects of a packed scene (hsqbench.planner.hsq.stage_one.clusters), and hsq's stage one on each of them."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from hsqbench.config import ConfigError, from_dict
+from hsqbench.config import from_dict
+from hsqbench.errors import ConfigError
 from hsqbench.planner import plan_grasps
-from hsqbench.planner.api import HSQPlanner, PlanningContext
-from hsqbench.planner.clusters import object_clusters
-from hsqbench.planner.config import PlannerConfig, RecoveryConfig
-from tests.test_baselines import CAMERAS, TABLE, two_boxes_apart
+from hsqbench.planner.api import PlanningContext
+from hsqbench.planner.hsq.config import PlannerConfig, RecoveryConfig
+from hsqbench.planner.hsq.planner import HSQPlanner
+from hsqbench.planner.hsq.stage_one.clusters import object_clusters
+from tests.planner.baselines.test_baselines import CAMERAS, TABLE, two_boxes_apart
 
 
 def test_object_clusters_split_objects_placed_apart() -> None:

@@ -7,11 +7,11 @@ import warnings
 import numpy as np
 import pytest
 
-from hsqbench.planner import ems
-from hsqbench.planner.config import RecoveryConfig
-from hsqbench.planner.ems import MixtureModel, _Fitter, ems_fit
-from hsqbench.planner.radial import SQState
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import RecoveryConfig
+from hsqbench.planner.hsq.stage_one import ems
+from hsqbench.planner.hsq.stage_one.ems import MixtureModel, _Fitter, ems_fit
+from hsqbench.planner.hsq.stage_one.radial import SQState
+from hsqbench.superquadric.geometry import Superquadric
 from tests.shapes import add_noise_and_outliers, random_rotation, surface_distance
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hsqbench.planner.radial import SQState, apply_increment, evaluate, jacobian
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.stage_one.radial import SQState, apply_increment, evaluate, jacobian
+from hsqbench.superquadric.geometry import Superquadric
 from tests.shapes import random_rotation
 
 BOUNDS = ((0.01, 5.0), (1e-6, 10.0))

@@ -16,10 +16,11 @@ from hsqbench.planner import (
     fit_superquadric,
     recover_hidden_superquadrics,
 )
-from hsqbench.planner.config import RecoveryConfig, load_planner_config
 from hsqbench.planner.downsample import voxel_downsample
-from hsqbench.planner.recovery import surface_spacing
-from hsqbench.superquadric import Superquadric, alpha_beta, point_to_surface_alpha
+from hsqbench.planner.hsq.config import RecoveryConfig, load_planner_config
+from hsqbench.planner.hsq.stage_one.recovery import surface_spacing
+from hsqbench.superquadric.fit import alpha_beta, point_to_surface_alpha
+from hsqbench.superquadric.geometry import Superquadric
 from tests.shapes import (
     add_noise_and_outliers,
     cylinder_with_box_on_top,

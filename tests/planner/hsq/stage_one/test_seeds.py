@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hsqbench.planner.config import RecoveryConfig
-from hsqbench.planner.recovery import part_count
-from hsqbench.planner.seeds import inertia_ellipsoid, kmeans_labels, paper_k
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import RecoveryConfig
+from hsqbench.planner.hsq.stage_one.recovery import part_count
+from hsqbench.planner.hsq.stage_one.seeds import inertia_ellipsoid, kmeans_labels, paper_k
+from hsqbench.superquadric.geometry import Superquadric
 from tests.shapes import random_rotation
 
 

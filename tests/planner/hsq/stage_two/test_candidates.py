@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from hsqbench.planner.candidates import CandidateSet, ClosingLines, RankedGrasps, roll_frames
+from hsqbench.planner.hsq.stage_two.candidates import (
+    CandidateSet,
+    ClosingLines,
+    RankedGrasps,
+    roll_frames,
+)
 
 
 def lines(n: int, rng: np.random.Generator) -> ClosingLines:

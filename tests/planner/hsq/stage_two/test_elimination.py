@@ -8,9 +8,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from hsqbench.planner.candidates import CandidateSet, ClosingLines, roll_frames
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.elimination import (
+from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet, ClosingLines, roll_frames
+from hsqbench.planner.hsq.stage_two.elimination import (
     approach_openings,
     body_hits,
     duplicate_lines,
@@ -18,8 +19,7 @@ from hsqbench.planner.elimination import (
     line_boxes,
     support_kappa,
 )
-from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.synthesis import roll_angles
+from hsqbench.planner.hsq.stage_two.synthesis import roll_angles
 
 GRIPPER = GripperModel()
 CONFIG = GraspConfig()

@@ -5,9 +5,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.hidden_bodies import body_obstacles, seen_free, shrunk_surface_samples
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.hidden_bodies import (
+    body_obstacles,
+    seen_free,
+    shrunk_surface_samples,
+)
+from hsqbench.superquadric.geometry import Superquadric
 from tests.shapes import Box, union_cloud, visible_mask
 
 TABLE = np.array([0.0, 0.0, 1.0, 0.0])

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.scoring import FACTOR_NAMES, contact_curvature, score_candidates
-from hsqbench.planner.synthesis import synthesize
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.scoring import FACTOR_NAMES, contact_curvature, score_candidates
+from hsqbench.planner.hsq.stage_two.synthesis import synthesize
+from hsqbench.superquadric.geometry import Superquadric
 
 CONFIG = GraspConfig()
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hsqbench.planner.shape_rows import ShapeRows
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.stage_two.shape_rows import ShapeRows
+from hsqbench.superquadric.geometry import Superquadric
 
 SQS = [
     Superquadric(1.0, 1.0, [0.03, 0.02, 0.05]),

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from hsqbench.planner.candidates import roll_frames
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.synthesis import synthesize
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import roll_frames
+from hsqbench.planner.hsq.stage_two.synthesis import synthesize
+from hsqbench.superquadric.geometry import Superquadric
 
 #: The paper's candidate families only: the tests below check its thresholds.
 CONFIG = GraspConfig(slide_all_shapes=False)

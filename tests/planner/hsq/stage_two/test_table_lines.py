@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.elimination import approach_openings, line_boxes, table_clear
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.synthesis import synthesize
-from hsqbench.planner.table_lines import LEVELLED, PINCHED, level_table_lines
-from hsqbench.superquadric import Superquadric
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.elimination import approach_openings, line_boxes, table_clear
+from hsqbench.planner.hsq.stage_two.synthesis import synthesize
+from hsqbench.planner.hsq.stage_two.table_lines import LEVELLED, PINCHED, level_table_lines
+from hsqbench.superquadric.geometry import Superquadric
 
 TABLE = np.array([0.0, 0.0, 1.0, 0.0])
 GRIPPER = GripperModel()
