@@ -71,23 +71,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="move an existing run folder aside (<name>.replaced-<time>) and start again",
     )
-    parser.add_argument(
-        "--until-halfwidth",
-        type=float,
-        default=None,
-        metavar="H",
-        help="add base seeds (after the protocol's) until every planner's GSR interval is at most "
-        "±H (e.g. 0.02), or --max-seeds is reached; recorded in run.json. Resume with the same "
-        "two options",
-    )
-    parser.add_argument(
-        "--max-seeds",
-        type=int,
-        default=10,
-        metavar="N",
-        help="with --until-halfwidth: at most N base seeds in all (default 10)",
-    )
+    _add_until_arguments(parser)
     parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
+    _add_rerun_arguments(parser)
+
+
+def _add_rerun_arguments(parser: argparse.ArgumentParser) -> None:
+    """--rerun-dir and what it records."""
     parser.add_argument(
         "--rerun-dir",
         type=Path,
@@ -107,6 +97,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="KEY",
         help="record this trial key (as in attempts.csv) instead; repeatable",
+    )
+
+
+def _add_until_arguments(parser: argparse.ArgumentParser) -> None:
+    """--until-halfwidth and its seed cap (:mod:`hsqbench.experiment.until_halfwidth`)."""
+    parser.add_argument(
+        "--until-halfwidth",
+        type=float,
+        default=None,
+        metavar="H",
+        help="add base seeds (after the protocol's) until every planner's GSR interval is at most "
+        "±H (e.g. 0.02), or --max-seeds is reached; recorded in run.json. Resume with the same "
+        "two options",
+    )
+    parser.add_argument(
+        "--max-seeds",
+        type=int,
+        default=10,
+        metavar="N",
+        help="with --until-halfwidth: at most N base seeds in all (default 10)",
     )
 
 
