@@ -1,4 +1,5 @@
-"""Benchmark protocol: ``configs/paper.yaml`` (and ``quick.yaml``) loaded into frozen dataclasses.
+"""Benchmark protocol: a file of ``configs/protocols/`` (``paper.yaml``, ``quick.yaml``, ...)
+loaded into frozen dataclasses (docs/protocols.md lists them).
 
 An :class:`ExperimentConfig` says *what* is run (objects, attempts, rounds, planners, seeds);
 *how* one trial runs (scene, robot, stop rule of a packed round) belongs to the trial runner's
