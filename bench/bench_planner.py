@@ -84,8 +84,8 @@ def clouds(n: int, rng: np.random.Generator) -> dict[str, tuple[np.ndarray, dict
         out[name] = (seen(cloud.points, cloud.normals, n, rng), kwargs)
     if ycb_dir(required=False) is not None:
         # The harness's own two-camera clouds (sensor model of configs/perception.yaml, table
-        # plane and camera centres included), rendered once and cached by eval_planner_ycb.
-        from eval_planner_ycb import observe
+        # plane and camera centres included), rendered once and cached by harness_clouds.
+        from harness_clouds import observe
 
         for name in YCB_OBJECTS:
             obs = observe(name, 0, None, refresh=False)
