@@ -51,9 +51,11 @@ def test_hash_changes_with_values() -> None:
 
 
 def test_unknown_config_name_lists_choices() -> None:
-    with pytest.raises(ConfigError, match=r"protocols: \[.*'paper'.*component configs: \[.*'trial'"):
+    with pytest.raises(
+        ConfigError, match=r"protocols: \[.*'paper'.*component configs: \[.*'trial'"
+    ):
         load_config(Outer, "no-such-config")
-    with pytest.raises(ConfigError, match="no config file 'nowhere/x.yaml'"):
+    with pytest.raises(ConfigError, match=r"no config file 'nowhere/x\.yaml'"):
         load_config(Outer, "nowhere/x.yaml")
 
 
@@ -78,7 +80,7 @@ def test_a_relative_extends_is_read_beside_the_variant_from_any_folder(tmp_path,
     monkeypatch.chdir(tmp_path / "elsewhere")
     assert load_config(Outer, "../mine/variant.yaml") == Outer(iterations=7, enabled=False)
     (tmp_path / "mine" / "variant.yaml").write_text("extends: missing.yaml\n")
-    with pytest.raises(ConfigError, match="missing.yaml"):
+    with pytest.raises(ConfigError, match=r"missing\.yaml"):
         load_config(Outer, tmp_path / "mine" / "variant.yaml")
 
 

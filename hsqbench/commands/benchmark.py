@@ -16,8 +16,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--config",
         default="paper",
-        help="protocol: a name in configs/protocols/ (paper, paper3, ycb, ycb3, quick, ...; "
-        "docs/protocols.md) or a YAML path (default: paper)",
+        help="protocol: paper, ycb, quick... (configs/protocols/) or a YAML path; default paper",
     )
     parser.add_argument(
         "--run",

@@ -158,7 +158,7 @@ class ExperimentConfig:
     """One benchmark protocol.
 
     Attributes:
-        planners: planner names, resolved by the trial runner (``hsqbench.planner.get_planner``).
+        planners: planner names, resolved by the trial runner (``hsqbench.planner.registry.get_planner``).
         seeds: base seeds. Every trial's seed derives from (base seed, experiment, object, index)
             (see :mod:`hsqbench.experiment.seeds`); more base seeds repeat the whole protocol on
             fresh poses and narrow the confidence intervals.
