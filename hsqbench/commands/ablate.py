@@ -17,7 +17,10 @@ HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions of
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--config", default="paper", help="protocol: paper, quick, or a YAML path (default: paper)"
+        "--config",
+        default="paper",
+        help="protocol: a name in configs/protocols/ (paper, paper3, ycb, ...) or a YAML path "
+        "(default: paper)",
     )
     parser.add_argument(
         "--run", default=None, metavar="NAME", help="run name under results/ (or a folder path)"

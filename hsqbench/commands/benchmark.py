@@ -17,7 +17,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--config",
         default="paper",
-        help="protocol: paper, quick, or a YAML path (default: paper)",
+        help="protocol: paper, ycb, quick... (configs/protocols/) or a YAML path; default paper",
     )
     parser.add_argument(
         "--run",
