@@ -60,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _check_names(args: argparse.Namespace) -> None:
     from hsqbench.assets.library import object_names
     from hsqbench.cli import CommandError
-    from hsqbench.planner import planner_names
+    from hsqbench.planner.registry import planner_names
 
     if args.planner not in planner_names():
         raise CommandError(
