@@ -21,8 +21,7 @@ seconds, ``MjData.time``). Entity paths:
 - ``world/planner/candidates/<class>``: candidates as arrows along the approach axis ending at
   P_G; ``kept`` coloured by score, the others by the rule that removed them (``width``,
   ``duplicate``, ``width``, ``support``, ``table``, ``collision``, ``sweep``).
-- ``world/planner/surface``: a planner's own surface model (the vgn and giga TSDF's zero
-  crossings), when it gives one;
+- ``world/planner/surface``: a planner's own surface (vgn and giga: the TSDF's zero crossings).
 - ``world/planner/top_grasps``: outlines of the best ``top_grasps`` grasps;
   ``world/planner/chosen_grasp``: the outline of the executed one (white).
 - ``plots/gripper_width``: finger opening over time, metres.
@@ -53,7 +52,7 @@ from hsqbench.viz.config import ViewerConfig, load_viewer_config
 from hsqbench.viz.gripper_outline import gripper_outline
 from hsqbench.viz.rerun_plan import (
     _best_scores,
-    _log_candidates,
+    _log_plan_geometry,
     _log_superquadrics,
     _log_top_grasps,
 )
@@ -304,14 +303,9 @@ class RerunRecorder:
         rr, cfg = self._rr, self.config
         self._at_now()
         hidden = list(getattr(plan, "hidden_superquadrics", []) or [])
-        cands = getattr(plan, "candidates", None)
         best = _best_scores(plan, len(hidden))
         _log_superquadrics(self.rec, rr, cfg, hidden, best, self._cloud)
-        if cands is not None and len(cands):
-            _log_candidates(self.rec, rr, cfg, cands)
-        surface = getattr(plan, "surface_points", None)
-        if surface is not None and len(surface):  # a volumetric planner's TSDF surface
-            self.rec.log("world/planner/surface", rr.Points3D(surface, radii=cfg.cloud_radius_m))
+        _log_plan_geometry(self.rec, rr, cfg, plan)
         grasps = plan.grasps
         _log_top_grasps(self.rec, rr, cfg, self.gripper, grasps)
         removed = ", ".join(f"{k} {v}" for k, v in getattr(plan, "removed_by", {}).items() if v)

@@ -31,10 +31,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.planner.api import PlanningContext, PlanResult, resolve_config, validate_plane
+from hsqbench.planner.api import PlanningContext, PlanResult, validate_plane
 from hsqbench.planner.base import CleanInput, PlannerBase
 from hsqbench.planner.cleaning import CleaningConfig
 from hsqbench.planner.grasp import Grasp
+from hsqbench.planner.hsq.config import resolve_config
 from hsqbench.planner.learned import detection, tsdf
 from hsqbench.planner.learned.volumetric_config import (
     VolumetricConfig,
