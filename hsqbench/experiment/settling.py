@@ -14,7 +14,9 @@ def unsettled_note(attempts: pd.DataFrame, meta: dict[str, Any]) -> str | None:
     if "scene_max_speed" not in attempts or not len(attempts):
         return None
     physics = meta.get("backend", {}).get("trial_config", {}).get("physics", {})
-    limit = physics.get("settle_speed_mps")
+    # Runs made before the tree was recorded resolved name the physics config (``physics:
+    # physics``) and predate the column: no limit to compare with.
+    limit = physics.get("settle_speed_mps") if isinstance(physics, dict) else None
     speeds = pd.to_numeric(
         attempts.drop_duplicates("trial_key")["scene_max_speed"], errors="coerce"
     ).dropna()
