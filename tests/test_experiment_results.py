@@ -273,3 +273,22 @@ def test_a_committed_run_from_before_the_grasp_columns_loads_with_them_empty() -
     assert rows and all(r["grasp_pose"] == "" and r["top_scores"] == "" for r in rows)
     assert np.isnan(pose_table([r["grasp_pose"] for r in rows])).all()
     assert all(r["outcome"] for r in rows if r["status"] == "ok")  # its own columns are read
+
+
+def test_every_column_is_documented() -> None:
+    """docs/results-format.md has a row for each column of both files (meaning and units)."""
+    import re
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "results-format.md").read_text()
+    attempts, rounds = doc.split("## `rounds.csv`")
+    documented = {
+        part: set(re.findall(r"^\| ([^|]+) \|", text, re.M))
+        for part, text in (("a", attempts), ("r", rounds))
+    }
+    names = {
+        part: {n for cell in cells for n in re.findall(r"`(\w+)`", cell)}
+        for part, cells in documented.items()
+    }
+    assert set(ATTEMPT_COLUMNS) <= names["a"], sorted(set(ATTEMPT_COLUMNS) - names["a"])
+    assert set(ROUND_COLUMNS) <= names["r"], sorted(set(ROUND_COLUMNS) - names["r"])
