@@ -23,7 +23,7 @@ from hsqbench.experiment.replay import (
     trial_rows,
 )
 from hsqbench.experiment.results import RUN_FILE, ResultStore
-from hsqbench.experiment.rows import numbers
+from hsqbench.experiment.rows import numbers, rows_for
 from hsqbench.experiment.seeds import TrialSpec
 from hsqbench.sim.ik_types import FLIP_ABOUT_APPROACH
 from hsqbench.sim.outcome import Outcome
@@ -126,3 +126,17 @@ def test_pose_records_round_trip():
     assert pose7([0, 0, 0], np.eye(3))[3:] == (1.0, 0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="7 finite numbers"):
         from_pose7([0.0, 1.0])
+
+
+@pytest.mark.slow
+def test_a_packed_round_replays_attempt_by_attempt_up_to_the_one_asked(config):
+    from hsqbench.sim.trial import run_packed_round
+
+    objects = ("proc_box", "proc_cylinder", "proc_sphere")
+    result = run_packed_round(list(objects), 3, "hsq", config)
+    assert len(result.attempts) >= 2
+    spec = TrialSpec("packed", "hsq", 0, 3, objects, 3)
+    rows, _ = rows_for(TrialRun(spec, result, None, 1.0, "test:1"), "hash", "code")
+    again = replay_trial(rows, config, upto=1)
+    assert [a.index for a in again] == [0, 1]
+    assert all(a.same for a in again if a.exact), [(a.recorded, a.replayed) for a in again]
