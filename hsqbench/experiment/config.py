@@ -1,4 +1,5 @@
-"""Benchmark protocol: ``configs/paper.yaml`` (and ``quick.yaml``) loaded into frozen dataclasses.
+"""Benchmark protocol: a file of ``configs/protocols/`` (``paper.yaml``, ``quick.yaml``, ...)
+loaded into frozen dataclasses (docs/protocols.md lists them).
 
 An :class:`ExperimentConfig` says *what* is run (objects, attempts, rounds, planners, seeds);
 *how* one trial runs (scene, robot, stop rule of a packed round) belongs to the trial runner's
@@ -11,7 +12,8 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from hsqbench.config import ConfigError, from_dict, load_config_data, resolve_config_path
+from hsqbench.config import from_dict, load_config_data, resolve_config_path
+from hsqbench.errors import ConfigError
 
 EXPERIMENTS = ("isolated", "packed", "pile")
 #: Experiments run as clutter-removal rounds (one record per round in ``rounds.csv``).
@@ -157,7 +159,7 @@ class ExperimentConfig:
     """One benchmark protocol.
 
     Attributes:
-        planners: planner names, resolved by the trial runner (``hsqbench.planner.get_planner``).
+        planners: planner names, resolved by the trial runner (``hsqbench.planner.registry.get_planner``).
         seeds: base seeds. Every trial's seed derives from (base seed, experiment, object, index)
             (see :mod:`hsqbench.experiment.seeds`); more base seeds repeat the whole protocol on
             fresh poses and narrow the confidence intervals.

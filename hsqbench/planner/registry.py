@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
-from hsqbench.planner.additions import AdditionsConfig, ablation_planners
+from hsqbench.planner.hsq.additions import AdditionsConfig, ablation_planners
 
 if TYPE_CHECKING:
     from hsqbench.planner.api import Planner
@@ -25,7 +25,7 @@ PlannerFactory = Callable[..., "Planner"]
 
 
 def _hsq(config: Any = None) -> Planner:
-    from hsqbench.planner.api import HSQPlanner
+    from hsqbench.planner.hsq.planner import HSQPlanner
 
     return HSQPlanner(config)
 
@@ -43,10 +43,10 @@ def _antipodal(config: Any = None) -> Planner:
 
 
 def _hsq_without(off: tuple[str, ...], name: str) -> PlannerFactory:
-    """hsq with the additions ``off`` switched off (hsqbench.planner.additions)."""
+    """hsq with the additions ``off`` switched off (hsqbench.planner.hsq.additions)."""
 
     def factory(config: Any = None) -> Planner:
-        from hsqbench.planner.api import HSQPlanner
+        from hsqbench.planner.hsq.planner import HSQPlanner
 
         return HSQPlanner(config, additions_off=off, name=name)
 

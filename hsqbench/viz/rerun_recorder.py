@@ -72,6 +72,17 @@ def _floor_centre(info: Any) -> NDArray[np.float64] | None:
     return np.array([*(0.5 * (lo[:2] + hi[:2])), lo[2]])
 
 
+def _layout(model: mujoco.MjModel, data: mujoco.MjData, info: Any) -> Any:
+    """The episode's default layout (:mod:`hsqbench.viz.blueprint`), its eye on the side of the
+    camera named first."""
+    cameras = sorted(getattr(info, "depth_cameras", ()), key=lambda c: camera_entity_name(c.name))
+    first = None
+    if cameras and hasattr(info, "workspace_min"):  # the settled scene's kinematics are current
+        first = data.cam_xpos[model.camera(cameras[0].name).id].copy()
+    names = [camera_entity_name(c.name) for c in cameras]
+    return episode_blueprint(names, first, _floor_centre(info))
+
+
 def camera_entity_name(name: str) -> str:
     """Entity name of a camera: the MuJoCo name without a ``cam_`` prefix (``cam_left`` ->
     ``left``)."""
@@ -127,7 +138,8 @@ class RerunRecorder:
         self.config = config if config is not None else load_viewer_config()
         self.step_interval_s = float(self.config.step_interval_s)
         if gripper is None:
-            from hsqbench.planner.api import resolve_config, resolve_gripper
+            from hsqbench.planner.gripper import resolve_gripper
+            from hsqbench.planner.hsq.config import resolve_config
 
             gripper = resolve_gripper(resolve_config(None).grasp.gripper)
         self.gripper = gripper
@@ -185,14 +197,7 @@ class RerunRecorder:
         kind, objects = getattr(info, "kind", "?"), list(getattr(info, "objects", []))
         seed = getattr(info, "seed", "?")
         self.rec.send_recording_name(f"{kind} {' '.join(objects)} seed {seed}")
-        cameras = sorted(
-            getattr(info, "depth_cameras", ()), key=lambda c: camera_entity_name(c.name)
-        )
-        first = None
-        if cameras and hasattr(info, "workspace_min"):  # the settled scene's kinematics are current
-            first = data.cam_xpos[model.camera(cameras[0].name).id].copy()
-        names = [camera_entity_name(c.name) for c in cameras]
-        self.rec.send_blueprint(episode_blueprint(names, first, _floor_centre(info)))
+        self.rec.send_blueprint(_layout(model, data, info))
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.rec.log(
             "scene",

@@ -73,6 +73,24 @@ def _index_values(column, arrow_type) -> NDArray[np.float64]:
     return column.to_numpy(zero_copy_only=False).astype(np.float64)
 
 
+def _read_texts(
+    batch, timelines: list[str], text_key: str, entity: str, latest: dict[str, tuple[float, str]]
+) -> None:
+    """Keep in ``latest`` the text of ``entity`` logged last on ``text_key`` (static: earliest)."""
+    for text_col in ("TextDocument:text", "TextLog:text"):
+        if text_col not in batch.schema.names:
+            continue
+        when = (
+            _index_values(batch.column(text_key), batch.schema.field(text_key).type)
+            if text_key in timelines
+            else np.full(batch.num_rows, -np.inf)
+        )
+        for t, value in zip(when, batch.column(text_col).to_pylist(), strict=True):
+            text = value[-1] if isinstance(value, list) and value else value
+            if text and t >= latest.get(entity, (-np.inf, ""))[0]:
+                latest[entity] = (float(t), str(text))
+
+
 def _read_geometry(summary: RecordingSummary, entity: str, batch) -> None:
     """Note the first camera positions and the workspace box (for the default view)."""
     names = batch.schema.names
@@ -137,18 +155,7 @@ def read_recording(path: str | Path, text_key: str = "sim_time") -> RecordingSum
                 column = batch.column(name)
                 per = times.setdefault(name, {}).setdefault(entity, [])
                 per.append(_index_values(column, batch.schema.field(name).type))
-            for text_col in ("TextDocument:text", "TextLog:text"):
-                if text_col not in batch.schema.names:
-                    continue
-                when = (
-                    _index_values(batch.column(text_key), batch.schema.field(text_key).type)
-                    if text_key in chunk.timeline_names
-                    else np.full(batch.num_rows, -np.inf)
-                )
-                for t, value in zip(when, batch.column(text_col).to_pylist(), strict=True):
-                    text = value[-1] if isinstance(value, list) and value else value
-                    if text and t >= latest.get(entity, (-np.inf, ""))[0]:
-                        latest[entity] = (float(t), str(text))
+            _read_texts(batch, chunk.timeline_names, text_key, entity, latest)
     except Exception as exc:
         raise ValueError(f"Rerun cannot read {p} (a truncated or corrupt file?): {exc}") from None
     summary.texts = {e: text for e, (_, text) in latest.items()}
