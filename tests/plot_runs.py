@@ -62,13 +62,15 @@ def synthetic_run(planners=("hsq", "antipodal", "oracle"), pile: bool = False) -
     }
     graspable = [1] * 8 + [0] * 2
     packed = ["success"] * 5 + ["dropped"]
+    pile_outcomes = ["success", "no_grasp_found", "collision_on_approach", "empty_grasp", "dropped"]
+    pile_outcomes += ["success"]
     rows, rnd = [], []
     for p in planners:
         rows += attempts("isolated", p, iso[p], graspable)
         rows += attempts("packed", p, packed, [1] * 6)
         rnd += rounds("packed", p, [5, 4] if p == "hsq" else [3, 2])
         if pile:
-            rows += attempts("pile", p, packed[::-1], [1] * 6)
+            rows += attempts("pile", p, pile_outcomes, [1] * 6)
             rnd += rounds("pile", p, [4, 4])
     frame = pd.DataFrame(rows)
     frame["success"] = frame["success"].astype(int)
@@ -108,10 +110,9 @@ def _drawn_texts(fig: Any) -> list[tuple[str, Any]]:
     texts = [*fig.texts, *(t for legend in fig.legends for t in legend.get_texts())]
     for ax in (a for a in fig.axes if a.get_visible()):
         texts += [ax.title, ax.xaxis.label, ax.yaxis.label, *ax.texts]
-        texts += _in_view(ax.get_xticklabels(), ax.get_xlim(), 0)
-        texts += _in_view(ax.get_yticklabels(), ax.get_ylim(), 1)
-        for child in ax.child_axes:  # secondary axes: labels at the parent's tick positions
-            texts += _in_view(child.get_yticklabels(), ax.get_ylim(), 1)
+        if ax.axison:  # an axes turned off (a column of text) draws no ticks
+            texts += _in_view(ax.get_xticklabels(), ax.get_xlim(), 0)
+            texts += _in_view(ax.get_yticklabels(), ax.get_ylim(), 1)
     return [(t.get_text(), t.get_window_extent(renderer).padded(-1))
             for t in texts if t.get_visible() and t.get_text().strip()]  # fmt: skip
 
@@ -119,3 +120,10 @@ def _drawn_texts(fig: Any) -> list[tuple[str, Any]]:
 def _in_view(labels: list, limits: tuple[float, float], axis: int) -> list:
     lo, hi = sorted(limits)
     return [t for t in labels if lo <= t.get_position()[axis] <= hi]
+
+
+def only(data: RunData, experiment: str) -> RunData:
+    """``data`` with one experiment's attempts and rounds left (a pile-only run, say)."""
+    data.attempts = data.attempts[data.attempts["experiment"] == experiment]
+    data.rounds = data.rounds[data.rounds["trial_key"].str.startswith(f"{experiment}/")]
+    return data

@@ -10,7 +10,7 @@ import pytest
 from hsqbench.experiment.plots.failures import OUTCOMES, draw_failures, outcome_fractions
 from hsqbench.experiment.plots.palette import OUTCOME_COLOURS
 from hsqbench.experiment.report import outcome_table
-from tests.plot_runs import cut_off_texts, overlapping_texts, synthetic_run
+from tests.plot_runs import cut_off_texts, only, overlapping_texts, synthetic_run
 
 PLANNERS = ("hsq", "antipodal", "oracle")
 
@@ -70,3 +70,10 @@ def test_nothing_to_draw_without_attempts():
     empty = _outcomes()
     empty["attempts"] = 0
     assert draw_failures(empty, list(PLANNERS)) is None
+
+
+def test_one_experiment_makes_a_narrow_figure_whose_legend_still_fits():
+    table = outcome_table(only(synthetic_run(pile=True), "pile"))
+    fig = draw_failures(table, list(PLANNERS))
+    assert [ax.get_title().split("\n")[0] for ax in fig.axes] == ["pile"]
+    assert overlapping_texts(fig) == [] and cut_off_texts(fig) == []

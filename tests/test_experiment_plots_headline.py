@@ -9,7 +9,7 @@ from hsqbench.experiment.plots.headline import draw_headline, measured_rates
 from hsqbench.experiment.plots.palette import FIXED
 from hsqbench.experiment.reported import reported_rows
 from hsqbench.experiment.stats import wilson_interval
-from tests.plot_runs import cut_off_texts, overlapping_texts, synthetic_run
+from tests.plot_runs import cut_off_texts, only, overlapping_texts, synthetic_run
 
 LONG = ("hsq-no-support-facing", "contact-graspnet-elim", "oracle")
 
@@ -88,3 +88,10 @@ def test_nothing_to_draw_without_measured_rows():
     data.attempts = data.attempts[:0]
     data.rounds = data.rounds[:0]
     assert draw_headline(data) is None
+
+
+@pytest.mark.parametrize("experiment", ["isolated", "pile"])
+def test_one_experiment_makes_a_narrow_figure_whose_legend_still_fits(experiment):
+    fig = draw_headline(only(synthetic_run(pile=True), experiment))
+    assert len(fig.axes) == (1 if experiment == "isolated" else 2)
+    assert overlapping_texts(fig) == [] and cut_off_texts(fig) == []

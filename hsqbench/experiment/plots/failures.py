@@ -37,7 +37,8 @@ def draw_failures(outcomes: pd.DataFrame, planners: list[str]) -> Any:
     experiments = list(dict.fromkeys(frac["experiment"]))
     rows = row_order(planners, frac["planner"])
     used = [o for o in OUTCOMES if frac[o].sum() > 0]
-    fig = figure(2.9 * len(experiments) + 1.9, 0.32 * len(rows) + 1.9)
+    width_in = 2.9 * len(experiments) + 1.9
+    fig = figure(width_in, 0.32 * len(rows) + 1.9)
     axes = fig.subplots(1, len(experiments), sharey=True, squeeze=False).ravel()
     for ax, exp in zip(axes, experiments, strict=True):
         mine = frac[frac["experiment"] == exp].set_index("planner").reindex(rows)
@@ -53,7 +54,7 @@ def draw_failures(outcomes: pd.DataFrame, planners: list[str]) -> Any:
         _style(ax, mine, exp, rows)
     handles, names = axes[0].get_legend_handles_labels()
     fig.legend(handles, [n.replace("_", " ") for n in names], loc="outside lower center",
-               ncols=min(4, len(used)), fontsize=8, frameon=False)  # fmt: skip
+               ncols=min(4, len(used), int(width_in / 1.7)), fontsize=8, frameon=False)  # fmt: skip
     fig.suptitle("How attempts end (% of each planner's attempts)", fontsize=10)
     return fig
 

@@ -2,7 +2,7 @@
 on the same presentations (``paired.csv``, :mod:`hsqbench.experiment.paired_table`), a panel
 per comparison (isolated GSR, packed CR, pile CR). The thick bar is the paired interval over
 presentations; the thin one below it the cluster-bootstrap interval over objects or rounds;
-the right margin gives the numbers and the verdict in words."""
+a column beside each panel gives the numbers and the verdict in words."""
 
 from __future__ import annotations
 
@@ -43,13 +43,17 @@ def draw_forest(paired: pd.DataFrame, planners: list[str], confidence: float) ->
     comparisons = list(dict.fromkeys(paired["comparison"]))
     order = {p: i for i, p in enumerate(row_order(planners, paired["planner"]))}
     sizes = [int((paired["comparison"] == c).sum()) for c in comparisons]
-    fig = figure(8.5, sum(0.34 * n + 1.05 for n in sizes) + 0.7)
-    axes = fig.subplots(len(comparisons), 1, squeeze=False, height_ratios=[n + 2 for n in sizes])
+    fig = figure(9.0, sum(0.34 * n + 1.05 for n in sizes) + 0.6)
+    # A column of plots and one of numbers beside them: the plots line up whatever the text.
+    grid = fig.subplots(len(comparisons), 2, squeeze=False, sharey="row",
+                        height_ratios=[n + 2 for n in sizes], width_ratios=[3.0, 1.75])  # fmt: skip
     colours = planner_colours(planners)
-    for ax, comparison in zip(axes.ravel(), comparisons, strict=True):
+    for (ax, text), comparison in zip(grid, comparisons, strict=True):
         rows = paired[paired["comparison"] == comparison]
         rows = rows.sort_values("planner", key=lambda s: s.map(order), kind="stable")
-        _panel(ax, rows.reset_index(drop=True), colours, comparison, reference)
+        rows = rows.reset_index(drop=True)
+        _panel(ax, rows, colours, comparison, reference)
+        _numbers(text, rows)
     _legend(fig)
     level = f"{100 * confidence:g} %"
     fig.suptitle(f"Paired difference to {reference} on the same presentations ({level} "
@@ -75,15 +79,21 @@ def _panel(ax: Any, rows: pd.DataFrame, colours: dict, comparison: str, referenc
     ax.set_xlim(*_limits(bounds.to_numpy(dtype=float)))
     ax.set_ylim(len(rows) - 0.4, -0.6)
     ax.set_yticks(y, [method_label(str(p)) for p in rows["planner"]])
-    right = ax.secondary_yaxis("right")
-    right.set_yticks(y, [right_label(r) for _, r in rows.iterrows()])
-    right.tick_params(labelsize=7.5, length=0)
     ax.tick_params(labelsize=8)
     ax.grid(axis="x", alpha=0.3)
     pairs = rows["pairs"].astype(int).tolist()
     what = "presentations" if comparison.endswith("GSR") else "objects"
     ax.set_title(f"{comparison}: planner − {reference}, {span(pairs)} paired {what}", fontsize=9)
     ax.set_xlabel("difference (percentage points)", fontsize=8)
+
+
+def _numbers(ax: Any, rows: pd.DataFrame) -> None:
+    """The right column: each row's numbers and verdict, level with its interval."""
+    ax.axis("off")
+    ax.set_xlim(0, 1)
+    for i, r in rows.iterrows():
+        ax.text(0.0, i, right_label(r), va="center", ha="left", fontsize=7.5)
+    ax.set_title("difference [interval]  won:lost  p  verdict", fontsize=8, loc="left")
 
 
 def _limits(bounds: np.ndarray) -> tuple[float, float]:
@@ -100,11 +110,5 @@ def _legend(fig: Any) -> None:
     handles = [
         Line2D([], [], marker="o", color="0.3", lw=2.2, label="paired interval (Newcombe)"),
         Line2D([], [], color="0.3", lw=0.9, label="over objects or rounds (cluster bootstrap)"),
-        Line2D(
-            [],
-            [],
-            ls="none",
-            label="right: difference [paired interval], won:lost pairs, McNemar p, verdict",
-        ),
     ]
     fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8, frameon=False)

@@ -172,4 +172,5 @@ def _legend(fig: Any, rates: pd.DataFrame, reported: bool, oracle: bool) -> None
     if oracle:
         handles.append(Line2D([], [], marker="o", color=planner_colours(["oracle"])["oracle"],
                               ls="-", label="oracle: privileged (true meshes), a ceiling"))  # fmt: skip
-    fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8, frameon=False)
+    ncols = 2 if fig.get_size_inches()[0] >= 7 else 1  # two long entries side by side need 7 in
+    fig.legend(handles=handles, loc="outside lower center", ncols=ncols, fontsize=8, frameon=False)

@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import FuncFormatter
 
 from hsqbench.experiment.plots.canvas import figure, n_text, row_order
 from hsqbench.experiment.plots.palette import planner_colours
@@ -65,6 +66,7 @@ def draw_planning_time(data: RunData) -> Any:
         box.set_alpha(0.6)
     ax.set_xticks(np.arange(1, len(planners) + 1), planners, rotation=20, ha="right", fontsize=8)
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))  # 0.1, 1, 10 (not 10^k)
     ax.set_ylabel("planning time per attempt (s)")
     ax.grid(axis="y", alpha=0.3)
     ax.set_title("Planning time (all experiments, log scale)", fontsize=10)
