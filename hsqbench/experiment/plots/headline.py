@@ -28,7 +28,6 @@ PANELS = (
     ("pile", "gsr", "pile GSR"),
     ("pile", "cr", "pile CR"),
 )
-SCOPES = ("all", "graspable")
 _OFFSET = 0.17  # rows: "all" above the planner's line, "graspable" below it
 
 
