@@ -32,7 +32,14 @@ from hsqbench.experiment.graspable import (
 )
 from hsqbench.experiment.markdown import OUTCOME_COLUMNS, render_markdown
 from hsqbench.experiment.pile_table import TABLE4_CSV, render_table4, table4
-from hsqbench.experiment.plots import plot_gsr_per_object, plot_outcomes, plot_planning_time
+from hsqbench.experiment.plots import (  # noqa: F401 (the plot names are the report's API)
+    GSR_PLOT,
+    HEADLINE_PLOT,
+    OUTCOMES_PLOT,
+    PAIRED_PLOT,
+    TIMES_PLOT,
+    write_plots,
+)
 from hsqbench.experiment.reported import PROVENANCE, reported_rows
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.run_data import RunData, load_run
@@ -45,9 +52,6 @@ TABLE1_OBJECTS_CSV = "table1_per_object.csv"
 TABLE2_CSV = "table2_packed.csv"
 OUTCOMES_CSV = "outcomes.csv"
 TIMES_CSV = "planning_time.csv"
-GSR_PLOT = "gsr_per_object.png"
-OUTCOMES_PLOT = "outcomes.png"
-TIMES_PLOT = "planning_time.png"
 
 
 def _ok(df: pd.DataFrame, experiment: str, planner: str | None = None) -> pd.DataFrame:
@@ -290,15 +294,7 @@ def write_report(
     after = [*render_table4(data, t4), *judged_lines]
     md.write_text(render_markdown(data, t1, t1o, t2, outcomes, times, after))
     written.append(md)
-    if not t1o.empty:
-        plot_gsr_per_object(data, t1o, run_dir / GSR_PLOT)
-        written.append(run_dir / GSR_PLOT)
-    if not outcomes.empty:
-        plot_outcomes(outcomes, run_dir / OUTCOMES_PLOT)
-        written.append(run_dir / OUTCOMES_PLOT)
-    if not times.empty:
-        plot_planning_time(data, run_dir / TIMES_PLOT)
-        written.append(run_dir / TIMES_PLOT)
+    written += write_plots(data, t1o, outcomes, judged, run_dir)
     n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0
     if n_err:
         warnings.warn(
