@@ -29,6 +29,8 @@ _EXPORTS = {
     "plan_grasps": "hsqbench.planner.api",
     "plan_from_hidden": "hsqbench.planner.api",
     "HSQPlanner": "hsqbench.planner.api",
+    "PlannerBase": "hsqbench.planner.base",
+    "CleanInput": "hsqbench.planner.base",
     "register_planner": "hsqbench.planner.registry",
     "get_planner": "hsqbench.planner.registry",
     "planner_names": "hsqbench.planner.registry",

@@ -95,6 +95,21 @@ _CONFIG_KEYS: dict[str, str] = {
 #: Planners that read simulator truth: their rows are a ceiling, not a method to compare with.
 PRIVILEGED = frozenset({"oracle"})
 
+#: One line on each built-in planner (``hsqbench planners``; the ablations are described from
+#: their addition's sentence).
+DESCRIPTIONS: dict[str, str] = {
+    "hsq": "the paper's method (hidden superquadrics) with our additions (configs/planner.yaml)",
+    "hsq-paper": "the paper's rules alone: hsq with every addition off",
+    "single-sq": "baseline: one superquadric per object, the approach the paper improves on",
+    "antipodal": "baseline: antipodal pairs of surface normals (GPD-style candidate sampler)",
+    "contact-graspnet": "learned baseline: Contact-GraspNet (Sundermeyer et al., ICRA 2021)",
+    "contact-graspnet-elim": "Contact-GraspNet's grasps through the harness's elimination rules",
+    "oracle": "privileged ceiling: plans on the true meshes, not the cloud",
+}
+
+#: The planners of hsqbench itself (the others come from plugins: :mod:`.plugins`).
+_BUILTIN = frozenset(_FACTORIES)
+
 
 def unavailable(name: str) -> str | None:
     """Why planner ``name`` cannot run here (an optional extra is missing), or None.
@@ -148,22 +163,62 @@ def planner_config_key(name: str) -> str | None:
 
 
 def planner_names() -> list[str]:
-    """Registered planner names, sorted."""
-    return sorted(_FACTORIES)
+    """Planner names, sorted: built-in, registered, and installed (entry points of
+    ``hsqbench.planners``, not imported until used)."""
+    from hsqbench.planner.plugins import entry_points
+
+    return sorted(set(_FACTORIES) | set(entry_points()))
+
+
+def is_builtin(name: str) -> bool:
+    """Whether ``name`` is one of hsqbench's own planners."""
+    return name in _BUILTIN
 
 
 def get_planner(name: str, config: Any = None) -> Planner:
     """A new planner ``name`` built with ``config`` (None: that planner's defaults).
+
+    ``name`` may be a spec (``module:Name``, ``path/to/file.py:Name``): see
+    :func:`resolve_planner`.
 
     Raises:
         ValueError: unknown ``name``; the message lists the registered names.
         LearnedExtraMissing: (a RuntimeError) ``contact-graspnet*`` without the ``learned``
             extra; the message says how to install it.
     """
-    try:
-        factory = _FACTORIES[name]
-    except KeyError:
+    return _factory(resolve_planner(name))(config)
+
+
+def _factory(name: str) -> PlannerFactory:
+    """The factory of known planner ``name``, loading an installed one on first use."""
+    if name not in _FACTORIES:
+        from hsqbench.planner.plugins import load_entry_point
+
+        _FACTORIES[name] = load_entry_point(name)
+    return _FACTORIES[name]
+
+
+def resolve_planner(name_or_spec: str) -> str:
+    """The name of a planner given by name or by spec (``module:Name``, ``file.py:Name``,
+    registered here on first use: :mod:`hsqbench.planner.plugins`).
+
+    Raises:
+        ValueError: an unknown name (with the closest known one, and every choice), or a spec
+            that cannot be loaded (:class:`~hsqbench.planner.plugins.PluginError`).
+    """
+    from hsqbench.planner.plugins import is_spec, near, register_spec
+
+    if is_spec(name_or_spec):
+        return register_spec(name_or_spec)
+    names = planner_names()
+    if name_or_spec not in names:
         raise ValueError(
-            f"unknown planner {name!r}; choose one of: {', '.join(planner_names())}"
-        ) from None
-    return factory(config)
+            f"unknown planner {name_or_spec!r}{near(name_or_spec, names)}; choose one of: "
+            f"{', '.join(names)}, or give your own as module:Name or path/to/file.py:Name"
+        )
+    return name_or_spec
+
+
+def resolve_planners(items: Iterable[str]) -> list[str]:
+    """:func:`resolve_planner` of each item, duplicates dropped."""
+    return list(dict.fromkeys(resolve_planner(p) for p in items))
