@@ -6,30 +6,26 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, add_protocol, protocol_of
+
 if TYPE_CHECKING:
+    from hsqbench.experiment.config import ExperimentConfig
     from hsqbench.experiment.runner import RunSummary
 
-HELP = "run the isolated and packed experiments of a protocol config and write results/<run>/"
+HELP = (
+    "run the experiments of a benchmark protocol with its planners (or yours) into results/<run>/"
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--config",
-        default="paper",
-        help="protocol: paper, quick, or a YAML path (default: paper)",
-    )
+    add_protocol(parser)
     parser.add_argument(
         "--run",
         default=None,
         metavar="NAME",
-        help="run name under results/ (or a folder path); default <config>-<UTC time>",
+        help="run name under results/ (or a folder path); default <protocol>-<UTC time>",
     )
-    parser.add_argument(
-        "--jobs",
-        type=int,
-        default=None,
-        help="worker processes (default: the cores available; 1 runs in this process)",
-    )
+    add_jobs(parser)
     parser.add_argument(
         "--executor",
         choices=("local", "ray"),
@@ -45,7 +41,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "same HSQ_* paths",
     )
     parser.add_argument(
-        "--planners", nargs="+", default=None, metavar="NAME", help="only these planners"
+        "--planners",
+        nargs="+",
+        default=None,
+        metavar="PLANNER",
+        help="run these planners on the protocol's scenes (default: the protocol's own): "
+        f"{PLANNER_SPEC_HELP}. One the protocol lacks joins its planner list (a run of its own)",
     )
     parser.add_argument(
         "--experiments",
@@ -119,13 +120,11 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError("--retry-errors only applies with --resume --run NAME")
     if args.resume and args.run is None:
         raise CommandError("--resume needs --run NAME (the run to continue)")
-    config = load_experiment_config(args.config)
-    planners = args.planners
-    if planners is None:  # the protocol's planners, less optional ones whose extra is missing
-        from hsqbench.planner.registry import runnable
-
-        planners = runnable(config.planners)
-    run_dir = _run_dir(args.run, args.config)
+    protocol = protocol_of(args)
+    config, planners = protocol_planners(load_experiment_config(protocol), args.planners)
+    run_dir = _run_dir(args.run, protocol)
+    if args.resume:
+        _check_resumed_planners(run_dir, config.planners)
     executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)
     try:
@@ -138,14 +137,15 @@ def run(args: argparse.Namespace) -> int:
             resume=args.resume,
             force=args.force,
             retry_errors=args.retry_errors,
-            config_name=args.config,
+            config_name=protocol,
         )
     except TrialRunnerUnavailable as exc:
         raise CommandError(f"cannot run the benchmark: {exc}") from exc
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: finished trials are saved in {run_dir}; continue with\n"
-            f"  hsqbench benchmark --config {args.config} --run {run_dir} --resume",
+            f"  hsqbench benchmark --protocol {protocol} --run {run_dir} --resume"
+            + (f" --planners {' '.join(args.planners)}" if args.planners else ""),
             file=sys.stderr,
         )
         return 130
@@ -160,6 +160,46 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def protocol_planners(
+    config: ExperimentConfig, chosen: list[str] | None
+) -> tuple[ExperimentConfig, list[str]]:
+    """The protocol and the planners to run: ``chosen`` (names or plugin specs) or the
+    protocol's own, less optional ones whose extra is missing (said on stderr). A chosen planner
+    the protocol lacks joins its list (as in ``sweep``): the run's identity then names it, and
+    ``report --with`` joins this run to another of the same protocol."""
+    import dataclasses
+
+    from hsqbench.planner.registry import resolve_planners, runnable
+
+    if chosen is None:
+        return config, runnable(config.planners)
+    planners = resolve_planners(chosen)
+    if extra := [p for p in planners if p not in config.planners]:
+        config = dataclasses.replace(config, planners=(*config.planners, *extra))
+    return config, planners
+
+
+def _check_resumed_planners(run_dir: Path, planners: tuple[str, ...]) -> None:
+    """A resumed run keeps its planner list: say which --planners give it back."""
+    import json
+
+    from hsqbench.cli import CommandError
+
+    path = run_dir / "run.json"
+    if not path.is_file():
+        return
+    recorded = tuple(json.loads(path.read_text()).get("config", {}).get("planners", ()))
+    if recorded and recorded != planners:
+        sources = json.loads(path.read_text()).get("backend", {}).get("planner_sources", {})
+        given = [
+            sources[p]["spec"] if sources.get(p, {}).get("kind") == "file" else p for p in recorded
+        ]
+        raise CommandError(
+            f"{run_dir} was started with the planners {list(recorded)}, this command names "
+            f"{list(planners)}; resume it with --planners {' '.join(given)} (or start another --run)"
+        )
 
 
 def print_summary(run_dir: Path, summary: RunSummary, report: bool) -> None:
