@@ -101,8 +101,11 @@ class PlannerBase:
     name: ClassVar[str] | str
 
     def cleaning_config(self) -> CleaningConfig:
-        """The cleaning every input cloud gets (the hsq planner's, for a fair comparison)."""
-        raise NotImplementedError
+        """The cleaning every input cloud gets: by default the hsq planner's (``cleaning:`` of
+        ``configs/planner.yaml``), for a fair comparison; override to clean otherwise."""
+        from hsqbench.planner.api import resolve_config
+
+        return resolve_config(None).cleaning
 
     def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
         """The planner's own stages on the cleaned cloud; their timings in the result."""
