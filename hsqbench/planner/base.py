@@ -27,7 +27,10 @@ from hsqbench.planner.cleaning import (
 from hsqbench.planner.elimination import RULE_DESCRIPTIONS
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from hsqbench.planner.api import PlanningContext, PlanResult
+    from hsqbench.planner.grasp import Grasp
 
 
 @dataclass(frozen=True)
@@ -110,6 +113,16 @@ class PlannerBase:
     def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
         """The planner's own stages on the cleaned cloud; their timings in the result."""
         raise NotImplementedError
+
+    def apply_rules(
+        self, grasps: Sequence[Grasp], clean: CleanInput, context: PlanningContext
+    ) -> PlanResult:
+        """Opt in to the harness's elimination rules (width, support, table, collision,
+        approach sweep, as hsq's candidates get them): ``grasps`` less those a rule removes,
+        best score first (:func:`hsqbench.planner.rules.apply_rules`)."""
+        from hsqbench.planner.rules import apply_rules
+
+        return apply_rules(grasps, clean, context)
 
     def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
         """Validate and clean ``points``, run :meth:`stages`, and assemble the result."""
