@@ -1,7 +1,7 @@
 """A complete planner for hsqbench: one top-down grasp at the cloud's centroid.
 
-    hsqbench trial --planner examples/topdown.py:TopDown --object foam_brick
-    hsqbench benchmark --protocol quick --planners examples/topdown.py:TopDown hsq --jobs 2
+hsqbench trial --planner examples/topdown.py:TopDown --object foam_brick
+hsqbench benchmark --protocol quick --planners examples/topdown.py:TopDown hsq --jobs 2
 """
 
 import numpy as np

@@ -19,7 +19,9 @@ class TopDownRules(PlannerBase):
         widths = np.ptp(points @ closing.T, axis=0)  # the cloud's extent along each direction
         approach = np.array([0.0, 0.0, -1.0])  # from the palm toward the grasp point: down
         grasps = [
-            Grasp(position, np.column_stack([c, np.cross(approach, c), approach]), w, widths.min() / w)
+            Grasp(
+                position, np.column_stack([c, np.cross(approach, c), approach]), w, widths.min() / w
+            )
             for c, w in zip(closing, widths, strict=True)
         ]
         # Width, support, table, collision and approach sweep, as hsq's candidates get them.
