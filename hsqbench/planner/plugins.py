@@ -149,7 +149,11 @@ def load_spec(spec: str) -> tuple[Any, PlannerSource]:
             f"planner spec {spec!r}: importing {target} failed: {type(exc).__name__}: {exc}"
         ) from exc
     if not hasattr(module, attr):
-        names = [n for n, v in vars(module).items() if inspect.isclass(v) and hasattr(v, "plan")]
+        names = [
+            n
+            for n, v in vars(module).items()
+            if inspect.isclass(v) and hasattr(v, "plan") and v.__module__ == module.__name__
+        ]
         raise PluginError(
             f"planner spec {spec!r}: {target} has no {attr!r}{near(attr, names)}; its planner "
             f"classes: {', '.join(names) or 'none'}"
