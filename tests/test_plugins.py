@@ -6,7 +6,6 @@ from __future__ import annotations
 import hashlib
 import json
 import pickle
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -49,7 +48,7 @@ def test_a_file_spec_registers_under_the_planners_name_and_plans(tmp_path):
     path = _write(tmp_path)
     name = registry.resolve_planner(f"{path}:Mine")
     assert name == "mine" and "mine" in registry.planner_names()
-    cloud = np.random.default_rng(0).normal(0.0, 0.01, (200, 3)) + [0.5, 0.0, 0.05]
+    cloud = np.random.default_rng(0).normal(0.0, 0.01, (200, 3)) + np.array([0.5, 0.0, 0.05])
     result = registry.get_planner("mine").plan(cloud, PlanningContext())
     assert result.planner == "mine" and len(result.grasps) == 1
     assert result.timings["cleaning"] >= 0.0 and "total" in result.timings  # the base's cleaning

@@ -102,7 +102,12 @@ def _add_download(sub: argparse._SubParsersAction) -> None:
 def _add_import(sub: argparse._SubParsersAction) -> None:
     """``assets import``: a folder of meshes and how to read them."""
     p = sub.add_parser("import", help="register (and build) a folder of meshes (obj/stl/ply)")
-    p.add_argument("folder", type=Path, metavar="DIR")
+    p.add_argument(
+        "folder",
+        type=Path,
+        metavar="DIR",
+        help="a folder of .obj, .stl or .ply meshes (searched recursively), one object each",
+    )
     p.add_argument(
         "--density", type=float, default=None, help="kg/m^3 (default: importer.density_kg_m3)"
     )
