@@ -31,8 +31,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from eval_planner_ycb import observe  # noqa: E402
 
-from hsqbench.planner.api import resolve_config  # noqa: E402
 from hsqbench.planner.cleaning import CleaningConfig, isolated_mask  # noqa: E402
+from hsqbench.planner.hsq.config import resolve_config  # noqa: E402
 
 FAR_M = 0.01
 SURFACE_M = 0.004

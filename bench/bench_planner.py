@@ -36,8 +36,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from hsqbench.planner import plan_grasps  # noqa: E402
-from hsqbench.planner.api import plan_from_hidden, resolve_config  # noqa: E402
-from hsqbench.planner.recovery import recover_hidden_superquadrics  # noqa: E402
+from hsqbench.planner.hsq.config import resolve_config  # noqa: E402
+from hsqbench.planner.hsq.stage_one.recovery import recover_hidden_superquadrics  # noqa: E402
+from hsqbench.planner.hsq.stage_two.plan import plan_from_hidden  # noqa: E402
 from hsqbench.settings import cache_dir, ycb_dir  # noqa: E402
 from tests.shapes import (  # noqa: E402
     cylinder_with_box_on_top,

@@ -51,8 +51,9 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hsqbench.config import to_dict  # noqa: E402
-from hsqbench.planner.api import PlanningContext, resolve_config, resolve_gripper  # noqa: E402
-from hsqbench.planner.gripper import GripperModel  # noqa: E402
+from hsqbench.planner.api import PlanningContext  # noqa: E402
+from hsqbench.planner.gripper import GripperModel, resolve_gripper  # noqa: E402
+from hsqbench.planner.hsq.config import resolve_config  # noqa: E402
 from hsqbench.planner.registry import get_planner  # noqa: E402
 from hsqbench.settings import cache_dir  # noqa: E402
 

@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 def main() -> int:
     from hsqbench.assets.library import ycb_names
-    from hsqbench.planner.api import HSQPlanner
+    from hsqbench.planner.hsq.planner import HSQPlanner
     from hsqbench.sim.trial import load_trial_config, run_isolated_trial
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

@@ -36,9 +36,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from replay_attempts import parse_and_select
 
 from hsqbench.planner import get_planner
-from hsqbench.planner.api import resolve_gripper
 from hsqbench.planner.base import clean_input
-from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.gripper import GripperModel, resolve_gripper
 from hsqbench.sim.trial import load_trial_config, run_isolated_trial
 
 #: Surface samples per object hull set (about one per 2 mm^2 on a cup).

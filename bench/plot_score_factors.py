@@ -26,8 +26,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hsqbench.planner import plan_grasps
-from hsqbench.planner.config import load_planner_config
 from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.planner.hsq.config import load_planner_config
 from hsqbench.settings import RESULTS_DIR, ycb_dir
 from tests.shapes import visible_mask
 

@@ -8,22 +8,22 @@ typo in a config never passes silently.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import types
 import typing
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
 
+from hsqbench.errors import ConfigError
+from hsqbench.overrides import apply_overrides
 from hsqbench.settings import CONFIG_DIR
 
 T = TypeVar("T")
-
-
-class ConfigError(ValueError):
-    """A configuration file or mapping does not match its dataclass."""
 
 
 def resolve_config_path(name_or_path: str | Path) -> Path:
@@ -188,8 +188,6 @@ def load_tree(cls: type[T], name_or_path: str | Path, overrides: dict[str, Any] 
     it names expanded into it (:func:`expand_names`), ``overrides`` applied to that mapping
     (:func:`hsqbench.overrides.apply_overrides`: every path checked against the dataclasses),
     then the dataclasses built, each validating its own values."""
-    from hsqbench.overrides import apply_overrides
-
     path = resolve_config_path(name_or_path)
     data = expand_names(cls, load_config_data(path), path.name)
     if overrides:
@@ -217,3 +215,15 @@ def config_hash(config: Any) -> str:
     """A short, stable hash of a config's values, stored with every result row."""
     blob = json.dumps(to_dict(config), sort_keys=True).encode()
     return hashlib.sha256(blob).hexdigest()[:12]
+
+
+def load_cached(loader: Callable[[str], T], name_or_path: str | Path) -> T:
+    """``loader`` of the config ``name_or_path`` (a name in ``configs/`` or a YAML path), parsed
+    once per modification time of the file (planning many clouds re-reads nothing)."""
+    path = resolve_config_path(name_or_path)
+    return _load_cached(loader, str(path), path.stat().st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=32)
+def _load_cached(loader: Any, path: str, mtime_ns: int) -> Any:
+    return loader(path)

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from hsqbench.experiment.config import ExperimentConfig
 from hsqbench.experiment.report import RunData, load_run
 from hsqbench.sim.outcome import RoundResult, TrialResult
 
@@ -49,6 +50,40 @@ def _planner_name(planner: Any, in_process: bool) -> str:
     return name
 
 
+def protocol_planners(
+    config: ExperimentConfig, chosen: list[str] | None
+) -> tuple[ExperimentConfig, list[str]]:
+    """The protocol and the planners to run: ``chosen`` (names or plugin specs) or the
+    protocol's own, less optional ones whose extra is missing (said on stderr). A chosen planner
+    the protocol lacks joins its list (as in ``sweep``): the run's identity then names it, and
+    ``report --with`` joins this run to another of the same protocol."""
+    import dataclasses
+
+    from hsqbench.planner.registry import resolve_planners, runnable
+
+    if chosen is None:
+        return config, runnable(config.planners)
+    planners = resolve_planners(chosen)
+    if extra := [p for p in planners if p not in config.planners]:
+        config = dataclasses.replace(config, planners=(*config.planners, *extra))
+    return config, planners
+
+
+def run_folder(run: str | None, protocol: str) -> Path:
+    """The run folder: ``run`` (a name under ``results/``, or a path), else
+    ``results/<protocol>-<UTC time>``."""
+    from datetime import UTC, datetime
+
+    from hsqbench.settings import RESULTS_DIR
+
+    if run is None:
+        stem = Path(protocol).stem if protocol.endswith((".yaml", ".yml")) else protocol
+        return RESULTS_DIR / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}"
+    if "/" in run or run in (".", ".."):
+        return Path(run)
+    return RESULTS_DIR / run
+
+
 def run_trial(
     object: str | None = None,
     *,
@@ -73,7 +108,8 @@ def run_trial(
     Raises:
         ValueError: an unknown planner, object or scene (with the closest name).
     """
-    from hsqbench.commands._options import SCENES, check_objects
+    from hsqbench.experiment.config import EXPERIMENTS as SCENES
+    from hsqbench.names import check_objects
     from hsqbench.sim.trial import load_trial_config, run_isolated_trial, run_packed_round
 
     if scene not in SCENES:
@@ -123,16 +159,15 @@ def run_benchmark(
         resume, force: continue the run in ``run``, or move it aside and start anew.
         report: write ``tables.md`` and the plots into the run folder.
     """
-    from hsqbench.commands._options import check_config
-    from hsqbench.commands.benchmark import _run_dir, protocol_planners
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
     from hsqbench.experiment.runner import run_benchmark as run_protocol
+    from hsqbench.names import check_config
 
     check_config(protocol, "protocol")
     chosen = None if planners is None else [_planner_name(p, jobs == 1) for p in planners]
     config, names = protocol_planners(load_experiment_config(protocol), chosen)
-    run_dir = _run_dir(None if run is None else str(run), str(protocol))
+    run_dir = run_folder(None if run is None else str(run), str(protocol))
     run_protocol(
         config,
         run_dir,

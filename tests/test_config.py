@@ -6,7 +6,8 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from hsqbench.config import ConfigError, config_hash, from_dict, load_config
+from hsqbench.config import config_hash, from_dict, load_config
+from hsqbench.errors import ConfigError
 
 
 @dataclass(frozen=True)

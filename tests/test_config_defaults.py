@@ -21,7 +21,7 @@ CLASSES = {
     "oracle": "hsqbench.planner.oracle:OracleConfig",
     "perception": "hsqbench.sim.perception:PerceptionConfig",
     "physics": "hsqbench.sim.physics:PhysicsConfig",
-    "planner": "hsqbench.planner.config:PlannerConfig",
+    "planner": "hsqbench.planner.hsq.config:PlannerConfig",
     "robot": "hsqbench.sim.robot:RobotConfig",
     "scene": "hsqbench.sim.scene:SceneConfig",
     "trial": "hsqbench.sim.trial:TrialConfig",

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from hsqbench.config import ConfigError
+from hsqbench.errors import ConfigError
 from hsqbench.experiment.config import (
     YCB_OBJECTS,
     ExperimentConfig,

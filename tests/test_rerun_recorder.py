@@ -11,8 +11,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from hsqbench.planner.candidates import REJECTION_REASONS
 from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.hsq.stage_two.candidates import REJECTION_REASONS
 from hsqbench.sim.recorder import Recorder
 from hsqbench.viz.colors import NO_SCORE_COLOR, REASON_COLORS, score_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
@@ -152,7 +152,7 @@ def test_cameras_follow_rerun_conventions(recorded):
 def test_recorded_geometry_matches_the_simulation(tmp_path):
     """Drive the recorder by hand: the logged object pose is MuJoCo's, the mesh is in the body
     frame, and the cloud and superquadrics of a plan are logged where they are."""
-    from hsqbench.planner.api import plan_grasps
+    from hsqbench.planner.hsq.planner import plan_grasps
     from hsqbench.sim.scene import build_scene
 
     model, data, info = build_scene("isolated", [OBJECT], SEED)

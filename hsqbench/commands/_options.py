@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 SCENES = ("isolated", "packed", "pile")
@@ -84,6 +83,8 @@ def add_protocol(parser: argparse.ArgumentParser, default: str = "paper") -> Non
 
 def protocol_of(args: argparse.Namespace) -> str:
     """The protocol the user named (checked, with a "did you mean"), else the default."""
+    from hsqbench.names import check_config
+
     name = args.protocol or args.protocol_default
     check_config(name, "protocol")
     return name
@@ -91,36 +92,3 @@ def protocol_of(args: argparse.Namespace) -> str:
 
 def add_scene(parser: argparse.ArgumentParser, default: str, help_text: str) -> None:
     parser.add_argument("--scene", choices=SCENES, default=default, help=help_text)
-
-
-def check_config(name: str | Path, what: str) -> None:
-    """A config name that is neither a YAML path nor in configs/ is an error naming the
-    closest one."""
-    from hsqbench.planner.plugins import near
-    from hsqbench.settings import CONFIG_DIR
-
-    path = Path(name)
-    if path.suffix in (".yaml", ".yml"):
-        if not path.is_file():
-            raise FileNotFoundError(f"{what} {name}: no such file")
-        return
-    known = sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
-    if str(name) not in known:
-        raise ValueError(
-            f"no {what} {str(name)!r}{near(str(name), known)}: give a name in {CONFIG_DIR} "
-            f"({', '.join(known)}) or a YAML path"
-        )
-
-
-def check_objects(names: Sequence[str]) -> None:
-    """Every name must be an object of the library (else the closest, and all of them)."""
-    from hsqbench.assets.library import object_names
-    from hsqbench.planner.plugins import near
-
-    known = object_names()
-    for name in names:
-        if name not in known:
-            raise ValueError(
-                f"unknown object {name!r}{near(name, known)}; `hsqbench assets list` shows "
-                f"them all: {', '.join(known)}"
-            )

@@ -1,7 +1,7 @@
 """``hsqbench ablate``: the benchmark with hsq, hsq-paper and hsq with each addition off.
 
 It only builds the planner list (``hsq``, ``hsq-paper``, ``hsq-no-<addition>`` for each chosen
-addition of :mod:`hsqbench.planner.additions`, plus any ``--with`` baselines) and runs the
+addition of :mod:`hsqbench.planner.hsq.additions`, plus any ``--with`` baselines) and runs the
 protocol's experiments with it through the benchmark runner, into results/<run>/ with the usual
 tables: each row against ``hsq`` is what that addition buys.
 """
@@ -68,8 +68,8 @@ def ablation_planner_list(additions: list[str] | None, extra: tuple[str, ...] = 
     """
     import sys
 
-    from hsqbench.planner.additions import ADDITIONS, AdditionsConfig, planner_name
-    from hsqbench.planner.config import load_planner_config
+    from hsqbench.planner.hsq.additions import ADDITIONS, AdditionsConfig, planner_name
+    from hsqbench.planner.hsq.config import load_planner_config
 
     known = AdditionsConfig.names()
     off = load_planner_config().additions.off()
@@ -106,11 +106,11 @@ def run(args: argparse.Namespace) -> int:
     import sys
 
     from hsqbench.cli import CommandError
-    from hsqbench.commands.benchmark import _run_dir
     from hsqbench.experiment.backend import TrialRunnerUnavailable
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
     from hsqbench.experiment.runner import run_benchmark
+    from hsqbench.runs import run_folder
 
     if args.resume and args.run is None:
         raise CommandError("--resume needs --run NAME (the run to continue)")
@@ -119,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     protocol = protocol_of(args)
     planners = ablation_planner_list(args.additions, tuple(resolve_planners(args.extra)))
     config = dataclasses.replace(load_experiment_config(protocol), planners=tuple(planners))
-    run_dir = _run_dir(args.run, f"ablate-{Path(protocol).stem}")
+    run_dir = run_folder(args.run, f"ablate-{Path(protocol).stem}")
     print(f"run folder: {run_dir}; planners: {', '.join(planners)}", file=sys.stderr)
     try:
         summary = run_benchmark(

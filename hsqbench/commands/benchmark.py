@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING
 from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, add_protocol, protocol_of
 
 if TYPE_CHECKING:
-    from hsqbench.experiment.config import ExperimentConfig
     from hsqbench.experiment.runner import RunSummary
 
 HELP = (
@@ -94,19 +93,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _run_dir(run: str | None, config: str) -> Path:
-    from datetime import UTC, datetime
-
-    from hsqbench.settings import RESULTS_DIR
-
-    if run is None:
-        stem = Path(config).stem if config.endswith((".yaml", ".yml")) else config
-        return RESULTS_DIR / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}"
-    if "/" in run or run in (".", ".."):
-        return Path(run)
-    return RESULTS_DIR / run
-
-
 def run(args: argparse.Namespace) -> int:
     import sys
 
@@ -115,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
     from hsqbench.experiment.runner import run_benchmark
+    from hsqbench.runs import protocol_planners, run_folder
 
     if args.retry_errors and not args.resume:
         raise CommandError("--retry-errors only applies with --resume --run NAME")
@@ -122,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError("--resume needs --run NAME (the run to continue)")
     protocol = protocol_of(args)
     config, planners = protocol_planners(load_experiment_config(protocol), args.planners)
-    run_dir = _run_dir(args.run, protocol)
+    run_dir = run_folder(args.run, protocol)
     if args.resume:
         _check_resumed_planners(run_dir, config.planners)
     executor = make_executor(args.executor, args.jobs, args.address)
@@ -160,25 +147,6 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
-
-
-def protocol_planners(
-    config: ExperimentConfig, chosen: list[str] | None
-) -> tuple[ExperimentConfig, list[str]]:
-    """The protocol and the planners to run: ``chosen`` (names or plugin specs) or the
-    protocol's own, less optional ones whose extra is missing (said on stderr). A chosen planner
-    the protocol lacks joins its list (as in ``sweep``): the run's identity then names it, and
-    ``report --with`` joins this run to another of the same protocol."""
-    import dataclasses
-
-    from hsqbench.planner.registry import resolve_planners, runnable
-
-    if chosen is None:
-        return config, runnable(config.planners)
-    planners = resolve_planners(chosen)
-    if extra := [p for p in planners if p not in config.planners]:
-        config = dataclasses.replace(config, planners=(*config.planners, *extra))
-    return config, planners
 
 
 def _check_resumed_planners(run_dir: Path, planners: tuple[str, ...]) -> None:

@@ -29,8 +29,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _status(name: str) -> tuple[str, str]:
     """(kind, one line) of planner ``name``."""
     from hsqbench.planner import plugins
-    from hsqbench.planner.additions import ADDITIONS, ablation_planners
-    from hsqbench.planner.registry import DESCRIPTIONS, PRIVILEGED, is_builtin, unavailable
+    from hsqbench.planner.hsq.additions import ADDITIONS, ablation_planners
+    from hsqbench.planner.registry import (
+        DESCRIPTIONS,
+        PRIVILEGED,
+        is_builtin,
+        source_of,
+        unavailable,
+    )
 
     if is_builtin(name):
         if (why := unavailable(name)) is not None:
@@ -41,7 +47,7 @@ def _status(name: str) -> tuple[str, str]:
         else:
             text = DESCRIPTIONS[name]
         return ("built-in, privileged" if name in PRIVILEGED else "built-in"), text
-    source = plugins.source_of(name)
+    source = source_of(name)
     if source is None:
         return "registered", "registered in this process (register_planner)"
     where = source.spec

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hsqbench.commands._options import SCENES, add_scene, check_objects, deprecated
+from hsqbench.commands._options import SCENES, add_scene, deprecated
+from hsqbench.names import check_objects
 
 HELP = "build an isolated, packed or pile scene, print what it holds, render it to a PNG or export it as MJCF"
 

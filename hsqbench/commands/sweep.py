@@ -83,6 +83,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="sweep folder under results/ or a path (default results/sweeps); rerunning resumes",
     )
+    _add_execution(parser)
+
+
+def _add_execution(parser: argparse.ArgumentParser) -> None:
+    """How the sweep runs: workers, executor, errors, report only."""
     add_jobs(parser)
     parser.add_argument(
         "--executor",

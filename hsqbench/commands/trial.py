@@ -6,7 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, add_scene, check_objects, deprecated
+from hsqbench.commands._options import PLANNER_SPEC_HELP, add_scene, deprecated
+from hsqbench.names import check_objects
 
 HELP = "run one grasp trial (isolated object) or one packed round in the simulator"
 

@@ -167,7 +167,7 @@ class SimBackend:
         self._specs: tuple[tuple[str, str], ...] | None = None
 
     def __getstate__(self) -> dict[str, Any]:
-        from hsqbench.planner.plugins import specs_of
+        from hsqbench.planner.registry import specs_of
 
         return {
             "trial_config": self.trial_config,
@@ -188,7 +188,7 @@ class SimBackend:
     def _register_plugins(self) -> None:
         """In a worker: register the run's planners plugged in from specs (once)."""
         if self._specs:
-            from hsqbench.planner.plugins import register_specs
+            from hsqbench.planner.registry import register_specs
 
             register_specs(self._specs)
             self._specs = ()

@@ -10,7 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from hsqbench.config import ConfigError, load_config
+from hsqbench.config import load_config
+from hsqbench.errors import ConfigError
 
 EXPERIMENTS = ("isolated", "packed", "pile")
 #: Experiments run as clutter-removal rounds (one record per round in ``rounds.csv``).

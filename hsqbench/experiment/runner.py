@@ -29,7 +29,7 @@ from hsqbench.experiment.results import (
     ResultStore,
 )
 from hsqbench.experiment.seeds import TrialSpec, build_trials
-from hsqbench.planner.plugins import sources as planner_sources
+from hsqbench.planner.registry import planner_sources
 from hsqbench.settings import code_version
 
 

@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from hsqbench.config import ConfigError, load_config
+from hsqbench.config import load_config
+from hsqbench.errors import ConfigError
 from hsqbench.experiment.config import EXPERIMENTS
 
 

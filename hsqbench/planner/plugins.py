@@ -15,14 +15,14 @@ Two ways in, neither touching hsqbench:
 ``Attr`` is a planner class (built with no argument, or with the config given to
 :func:`~hsqbench.planner.registry.get_planner`) or a function returning a planner. Worker
 processes resolve entry points themselves; a spec travels to them with the run
-(:class:`~hsqbench.experiment.backend.SimBackend` carries :func:`specs_of`), and
-:func:`source_of` says where each planner's code came from (module, version, file hash) for the
-run's identity.
+(:class:`~hsqbench.experiment.backend.SimBackend` carries the specs registered in
+:mod:`~hsqbench.planner.registry`), and :class:`PlannerSource` says where each planner's code
+came from (module, version, file hash) for the run's identity. This module loads; the registry
+registers.
 """
 
 from __future__ import annotations
 
-import difflib
 import hashlib
 import importlib
 import importlib.util
@@ -33,6 +33,8 @@ from dataclasses import asdict, dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Any
+
+from hsqbench.names import near
 
 ENTRY_POINT_GROUP = "hsqbench.planners"
 
@@ -66,19 +68,9 @@ class PlannerSource:
         return asdict(self)
 
 
-# Planners registered from specs in this process: name -> source.
-_SPECS: dict[str, PlannerSource] = {}
-
-
 def is_spec(text: str) -> bool:
     """Whether ``text`` is a ``module:Attr`` or ``file.py:Attr`` spec rather than a name."""
     return ":" in text
-
-
-def near(word: str, choices: list[str]) -> str:
-    """`` (did you mean 'x'?)`` for the closest of ``choices`` to ``word``, else ``""``."""
-    close = difflib.get_close_matches(word, choices, n=1, cutoff=0.6)
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _file_hash(path: str | None) -> str | None:
@@ -204,36 +196,6 @@ def planner_name_of(obj: Any, attr: str) -> str:
     return name if isinstance(name, str) and name else attr
 
 
-def register_spec(spec: str) -> str:
-    """Register the planner of ``spec`` (once per process) and return its name.
-
-    Raises:
-        PluginError: the spec cannot be loaded, or its name is taken by another planner.
-    """
-    from hsqbench.planner.registry import is_builtin, register_planner
-
-    obj, source = load_spec(spec)
-    name = planner_name_of(obj, spec.rpartition(":")[2])
-    if name in _SPECS:
-        if _SPECS[name].spec != source.spec:
-            raise PluginError(
-                f"planner name {name!r} of {spec!r} is already taken by {_SPECS[name].spec}; "
-                "give one of them another name attribute"
-            )
-        return name
-    if is_builtin(name) or name in entry_points():
-        raise PluginError(
-            f"planner name {name!r} of {spec!r} is taken by a built-in or installed planner; "
-            "set another `name` on the class"
-        )
-    bad = [c for c in "/,; " if c in name]
-    if bad:
-        raise PluginError(f"planner name {name!r} of {spec!r} must not contain {bad}")
-    register_planner(name, factory(obj, repr(spec)))
-    _SPECS[name] = source
-    return name
-
-
 def entry_points() -> dict[str, metadata.EntryPoint]:
     """Installed planners: entry point name -> entry point (nothing is imported)."""
     return {ep.name: ep for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)}
@@ -266,37 +228,3 @@ def entry_point_source(name: str) -> PlannerSource:
     dist = ep.dist.name if ep.dist else None
     version = ep.dist.version if ep.dist else None
     return PlannerSource("entry-point", ep.value, module, dist, version, file, _file_hash(file))
-
-
-def specs_of() -> tuple[tuple[str, str], ...]:
-    """``(name, spec)`` of the planners registered from specs in this process, for worker
-    processes to register them again (:func:`register_specs`)."""
-    return tuple((n, s.spec) for n, s in _SPECS.items())
-
-
-def register_specs(pairs: tuple[tuple[str, str], ...]) -> None:
-    """Register ``(name, spec)`` pairs from :func:`specs_of` (in a worker); a spec that now
-    yields another name is an error (the file changed under the run)."""
-    for name, spec in pairs:
-        if name in _SPECS:
-            continue
-        got = register_spec(spec)
-        if got != name:
-            raise PluginError(f"planner spec {spec!r} now names {got!r}, not {name!r}")
-
-
-def sources(names: tuple[str, ...] | list[str]) -> dict[str, dict[str, Any]]:
-    """Where each plugin planner among ``names`` comes from (``{}`` when all are hsqbench's):
-    part of a run's identity, so a run's results name the code behind each planner."""
-    return {n: s.to_dict() for n in names if (s := source_of(n)) is not None}
-
-
-def source_of(name: str) -> PlannerSource | None:
-    """Where planner ``name``'s code comes from; None for a planner of hsqbench itself."""
-    if name in _SPECS:
-        return _SPECS[name]
-    from hsqbench.planner.registry import is_builtin
-
-    if not is_builtin(name) and name in entry_points():
-        return entry_point_source(name)
-    return None

@@ -16,16 +16,17 @@ import sys
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
-from hsqbench.planner.additions import AdditionsConfig, ablation_planners
+from hsqbench.planner.hsq.additions import AdditionsConfig, ablation_planners
 
 if TYPE_CHECKING:
     from hsqbench.planner.api import Planner
+    from hsqbench.planner.plugins import PlannerSource
 
 PlannerFactory = Callable[..., "Planner"]
 
 
 def _hsq(config: Any = None) -> Planner:
-    from hsqbench.planner.api import HSQPlanner
+    from hsqbench.planner.hsq.planner import HSQPlanner
 
     return HSQPlanner(config)
 
@@ -43,10 +44,10 @@ def _antipodal(config: Any = None) -> Planner:
 
 
 def _hsq_without(off: tuple[str, ...], name: str) -> PlannerFactory:
-    """hsq with the additions ``off`` switched off (hsqbench.planner.additions)."""
+    """hsq with the additions ``off`` switched off (hsqbench.planner.hsq.additions)."""
 
     def factory(config: Any = None) -> Planner:
-        from hsqbench.planner.api import HSQPlanner
+        from hsqbench.planner.hsq.planner import HSQPlanner
 
         return HSQPlanner(config, additions_off=off, name=name)
 
@@ -206,7 +207,8 @@ def resolve_planner(name_or_spec: str) -> str:
         ValueError: an unknown name (with the closest known one, and every choice), or a spec
             that cannot be loaded (:class:`~hsqbench.planner.plugins.PluginError`).
     """
-    from hsqbench.planner.plugins import is_spec, near, register_spec
+    from hsqbench.names import near
+    from hsqbench.planner.plugins import is_spec
 
     if is_spec(name_or_spec):
         return register_spec(name_or_spec)
@@ -222,3 +224,78 @@ def resolve_planner(name_or_spec: str) -> str:
 def resolve_planners(items: Iterable[str]) -> list[str]:
     """:func:`resolve_planner` of each item, duplicates dropped."""
     return list(dict.fromkeys(resolve_planner(p) for p in items))
+
+
+# Planners registered here from specs (module:Name, file.py:Name): name -> where from.
+_SPECS: dict[str, PlannerSource] = {}
+
+
+def register_spec(spec: str) -> str:
+    """Register the planner of ``spec`` (once per process) and return its name.
+
+    Raises:
+        PluginError: the spec cannot be loaded, or its name is taken by another planner.
+    """
+    from hsqbench.planner.plugins import (
+        PluginError,
+        entry_points,
+        factory,
+        load_spec,
+        planner_name_of,
+    )
+
+    obj, source = load_spec(spec)
+    name = planner_name_of(obj, spec.rpartition(":")[2])
+    if name in _SPECS:
+        if _SPECS[name].spec != source.spec:
+            raise PluginError(
+                f"planner name {name!r} of {spec!r} is already taken by {_SPECS[name].spec}; "
+                "give one of them another name attribute"
+            )
+        return name
+    if is_builtin(name) or name in entry_points():
+        raise PluginError(
+            f"planner name {name!r} of {spec!r} is taken by a built-in or installed planner; "
+            "set another `name` on the class"
+        )
+    if bad := [c for c in "/,; " if c in name]:
+        raise PluginError(f"planner name {name!r} of {spec!r} must not contain {bad}")
+    register_planner(name, factory(obj, repr(spec)))
+    _SPECS[name] = source
+    return name
+
+
+def specs_of() -> tuple[tuple[str, str], ...]:
+    """``(name, spec)`` of the planners registered from specs in this process, for worker
+    processes to register them again (:func:`register_specs`)."""
+    return tuple((n, s.spec) for n, s in _SPECS.items())
+
+
+def register_specs(pairs: tuple[tuple[str, str], ...]) -> None:
+    """Register ``(name, spec)`` pairs from :func:`specs_of` (in a worker).
+
+    Raises:
+        PluginError: a spec now yields another name (its file changed under the run).
+    """
+    from hsqbench.planner.plugins import PluginError
+
+    for name, spec in pairs:
+        if name not in _SPECS and (got := register_spec(spec)) != name:
+            raise PluginError(f"planner spec {spec!r} now names {got!r}, not {name!r}")
+
+
+def source_of(name: str) -> PlannerSource | None:
+    """Where planner ``name``'s code comes from; None for a planner of hsqbench itself."""
+    from hsqbench.planner.plugins import entry_point_source, entry_points
+
+    if name in _SPECS:
+        return _SPECS[name]
+    if not is_builtin(name) and name in entry_points():
+        return entry_point_source(name)
+    return None
+
+
+def planner_sources(names: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """Where each plugin planner among ``names`` comes from (``{}`` when all are hsqbench's):
+    part of a run's identity, so a run's results name the code behind each planner."""
+    return {n: s.to_dict() for n in names if (s := source_of(n)) is not None}

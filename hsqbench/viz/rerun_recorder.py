@@ -118,7 +118,8 @@ class RerunRecorder:
         self.config = config if config is not None else load_viewer_config()
         self.step_interval_s = float(self.config.step_interval_s)
         if gripper is None:
-            from hsqbench.planner.api import resolve_config, resolve_gripper
+            from hsqbench.planner.gripper import resolve_gripper
+            from hsqbench.planner.hsq.config import resolve_config
 
             gripper = resolve_gripper(resolve_config(None).grasp.gripper)
         self.gripper = gripper

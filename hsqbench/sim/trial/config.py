@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 from hsqbench.assets.config import AssetsConfig, load_assets_config
-from hsqbench.config import ConfigError, expand_names, from_dict, load_tree
+from hsqbench.config import expand_names, from_dict, load_tree
+from hsqbench.errors import ConfigError
 from hsqbench.planner.configs import PlannerConfigs
 from hsqbench.planner.oracle import OracleConfig
 from hsqbench.sim.ik import IKConfig
@@ -202,7 +203,8 @@ def named_inputs(config: TrialConfig) -> dict[str, Any]:
     planner configs that the baselines and the oracle read, the grippers, and the scene's world
     files. Hashed with the tree, so editing any of them changes a run's config hash."""
     from hsqbench.config import load_config_data, to_dict
-    from hsqbench.planner.api import resolve_config, resolve_gripper
+    from hsqbench.planner.gripper import resolve_gripper
+    from hsqbench.planner.hsq.config import resolve_config
     from hsqbench.sim.scene import world_files
 
     oracles = [config.planners.oracle, *([config.graspability] if config.graspability else [])]
