@@ -29,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _status(name: str) -> tuple[str, str]:
     """(kind, one line) of planner ``name``."""
     from hsqbench.planner import plugins
-    from hsqbench.planner.hsq.additions import ADDITIONS, ablation_planners
+    from hsqbench.planner.hsq.additions import ablation_planners
     from hsqbench.planner.registry import (
         DESCRIPTIONS,
         PRIVILEGED,
@@ -43,7 +43,7 @@ def _status(name: str) -> tuple[str, str]:
             return "needs extra", f"{DESCRIPTIONS[name]}; not installed: {why}"
         addition = ablation_planners().get(name)
         if addition is not None:
-            text = f"ablation: hsq without '{addition}' ({ADDITIONS[addition].sentence})"
+            text = f"ablation: hsq with '{addition}' off (additions: in configs/planner.yaml)"
         else:
             text = DESCRIPTIONS[name]
         return ("built-in, privileged" if name in PRIVILEGED else "built-in"), text
@@ -63,11 +63,15 @@ def _status(name: str) -> tuple[str, str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hsqbench.planner.registry import get_planner, planner_names, resolve_planners
+    from hsqbench.planner.registry import get_planner, is_builtin, planner_names, resolve_planners
 
     for name in resolve_planners(args.specs):
         get_planner(name)  # a spec must build, or the error says why (exit 2)
-    names = planner_names()
+    from hsqbench.planner.hsq.additions import ablation_planners
+
+    ablations = ablation_planners()
+    # hsqbench's planners first, their ablations next, plugins last.
+    names = sorted(planner_names(), key=lambda n: (not is_builtin(n), n in ablations, n))
     rows = [(n, *_status(n)) for n in names]
     width = [max(len(r[i]) for r in rows) for i in range(2)]
     for name, kind, text in rows:
