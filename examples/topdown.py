@@ -6,7 +6,9 @@ hsqbench benchmark --protocol quick --planners examples/topdown.py:TopDown hsq -
 
 import numpy as np
 
-from hsqbench.planner import Grasp, PlannerBase, PlanResult
+from hsqbench.planner.api import PlanResult
+from hsqbench.planner.base import PlannerBase
+from hsqbench.planner.grasp import Grasp
 
 
 class TopDown(PlannerBase):

@@ -1,4 +1,4 @@
-"""Names a user types (configs, objects): checked early, with the closest known name.
+"""Names a user types (protocols, objects): checked early, with the closest known name.
 
 A misspelt name gets one line naming the closest known one (``difflib``) and the choices, the
 same way for every command and the Python API.
@@ -17,26 +17,25 @@ def near(word: str, choices: Sequence[str]) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def check_config(name: str | Path, what: str) -> None:
-    """A config (``what``: protocol, trial config, ...) must be a YAML path or a name in
-    ``configs/``.
+def check_protocol(name: str | Path) -> None:
+    """A benchmark protocol must be a YAML path or a name in ``configs/protocols/``.
 
     Raises:
         FileNotFoundError: a YAML path that does not exist.
         ValueError: an unknown name, with the closest one and every choice.
     """
-    from hsqbench.settings import CONFIG_DIR
+    from hsqbench.settings import PROTOCOL_DIR
 
     path = Path(name)
     if path.suffix in (".yaml", ".yml"):
         if not path.is_file():
-            raise FileNotFoundError(f"{what} {name}: no such file")
+            raise FileNotFoundError(f"protocol {name}: no such file")
         return
-    known = sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
+    known = sorted(p.stem for p in PROTOCOL_DIR.glob("*.yaml"))
     if str(name) not in known:
         raise ValueError(
-            f"no {what} {str(name)!r}{near(str(name), known)}: give a name in {CONFIG_DIR} "
-            f"({', '.join(known)}) or a YAML path"
+            f"no protocol {str(name)!r}{near(str(name), known)}: give a name in "
+            f"{PROTOCOL_DIR} ({', '.join(known)}) or a YAML path"
         )
 
 

@@ -162,9 +162,9 @@ def run_benchmark(
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
     from hsqbench.experiment.runner import run_benchmark as run_protocol
-    from hsqbench.names import check_config
+    from hsqbench.names import check_protocol
 
-    check_config(protocol, "protocol")
+    check_protocol(protocol)
     chosen = None if planners is None else [_planner_name(p, jobs == 1) for p in planners]
     config, names = protocol_planners(load_experiment_config(protocol), chosen)
     run_dir = run_folder(None if run is None else str(run), str(protocol))

@@ -22,6 +22,10 @@ from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 CONFIG_DIR = REPO_ROOT / "configs"
+#: The benchmark protocols users run (``--config paper``), apart from the component configs.
+PROTOCOL_DIR = CONFIG_DIR / "protocols"
+#: The built-in robustness sweeps (``hsqbench sweep depth_noise``).
+SWEEP_DIR = PROTOCOL_DIR / "sweeps"
 SCENES_DIR = REPO_ROOT / "scenes"
 RESULTS_DIR = REPO_ROOT / "results"
 

@@ -101,7 +101,7 @@ def test_planners_lists_each_planner_on_one_line(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(network, "available", lambda: False)
     spec = tmp_path / "mine.py"
     spec.write_text(
-        "from hsqbench.planner import PlannerBase\n\nclass Mine(PlannerBase):\n"
+        "from hsqbench.planner.base import PlannerBase\n\nclass Mine(PlannerBase):\n"
         "    name = 'mine-listed'\n\n    def stages(self, clean, context):\n        pass\n"
     )
     assert main(["planners", f"{spec}:Mine"]) == 0

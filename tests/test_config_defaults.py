@@ -27,27 +27,10 @@ CLASSES = {
     "trial": "hsqbench.sim.trial:TrialConfig",
     "viewer": "hsqbench.viz.config:ViewerConfig",
 }
-#: Files that are not one class's defaults: protocols (hsqbench.experiment.config, whose
-#: object lists and sizes are the experiment itself) and variants that extend another file.
-NOT_DEFAULTS = {
-    "paper",
-    "paper3",
-    "paper3_facing",
-    "paper3_bodies",
-    "paper_pile",
-    "paper3_pile",
-    "paper_ablation",
-    "paper3_ablation",
-    "ycb_ablation",
-    "ycb3_ablation",
-    "quick",
-    "ycb",
-    "ycb3",
-    "ycb3_facing",
-    "ycb3_bodies",
-    "scene_resting",
-    "trial_resting",
-}
+#: Files that are not one class's defaults: variants that extend another file. The protocols
+#: (configs/protocols/, whose object lists and sizes are the experiment itself) are tested in
+#: tests/test_experiment_config.py.
+NOT_DEFAULTS = {"scene_resting", "trial_resting"}
 
 
 def _class(spec: str):

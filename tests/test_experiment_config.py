@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -15,6 +16,7 @@ from hsqbench.experiment.config import (
     PackedConfig,
     load_experiment_config,
 )
+from hsqbench.settings import PROTOCOL_DIR, REPO_ROOT
 
 YCB = os.environ.get("HSQ_YCB_DIR")
 needs_ycb = pytest.mark.skipif(not YCB or not Path(YCB).is_dir(), reason="HSQ_YCB_DIR is not set")
@@ -56,3 +58,34 @@ def test_the_unseen_object_protocol_holds_no_paper_object():
     for exp in cfg.enabled_experiments():
         assert not set(getattr(cfg, exp).objects) & set(YCB_OBJECTS)
     assert "oracle" in cfg.planners
+
+
+PROTOCOLS = sorted(p.stem for p in PROTOCOL_DIR.glob("*.yaml"))
+
+
+@pytest.mark.parametrize("name", PROTOCOLS)
+def test_every_protocol_loads_by_its_bare_name(name):
+    cfg = load_experiment_config(name)
+    assert cfg.planners and cfg.enabled_experiments()
+
+
+def test_the_documented_protocols_are_the_shipped_ones():
+    """docs/protocols.md has a section per protocol and per built-in sweep, and no other."""
+    text = (REPO_ROOT / "docs" / "protocols.md").read_text()
+    documented = set(re.findall(r"^### `([a-z0-9_]+)`", text, flags=re.M))
+    sweeps = {p.stem for p in (PROTOCOL_DIR / "sweeps").glob("*.yaml")}
+    assert documented == set(PROTOCOLS) | sweeps
+
+
+def test_a_variant_that_extends_a_protocol_by_name_works_from_any_folder(tmp_path, monkeypatch):
+    """What docs/protocols.md tells a user to write: a file of their own, anywhere, naming the
+    protocol it changes and stating only the change."""
+    variant = tmp_path / "variants" / "paper3_hsq.yaml"
+    variant.parent.mkdir()
+    variant.write_text("extends: paper3\nplanners: [hsq, hsq-paper]\npacked:\n  enabled: false\n")
+    monkeypatch.chdir(tmp_path)
+    cfg = load_experiment_config("variants/paper3_hsq.yaml")
+    base = load_experiment_config("paper3")
+    assert cfg.planners == ("hsq", "hsq-paper") and cfg.seeds == base.seeds == (0, 1, 2)
+    assert cfg.enabled_experiments() == ("isolated",)
+    assert cfg.isolated == base.isolated  # everything it does not name is the protocol's

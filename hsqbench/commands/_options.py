@@ -75,7 +75,8 @@ def add_protocol(parser: argparse.ArgumentParser, default: str = "paper") -> Non
         "--protocol",
         default=None,
         metavar="NAME",
-        help=f"benchmark protocol: paper, quick, ... (configs/) or a YAML path (default: {default})",
+        help="benchmark protocol: paper, ycb, quick, ... (configs/protocols/) or a YAML path "
+        f"(default: {default})",
     )
     deprecated(parser, "--config", "--protocol", "protocol")
     parser.set_defaults(protocol_default=default)
@@ -83,10 +84,10 @@ def add_protocol(parser: argparse.ArgumentParser, default: str = "paper") -> Non
 
 def protocol_of(args: argparse.Namespace) -> str:
     """The protocol the user named (checked, with a "did you mean"), else the default."""
-    from hsqbench.names import check_config
+    from hsqbench.names import check_protocol
 
     name = args.protocol or args.protocol_default
-    check_config(name, "protocol")
+    check_protocol(name)
     return name
 
 

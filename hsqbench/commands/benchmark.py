@@ -4,11 +4,18 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, add_protocol, protocol_of
+from hsqbench.commands._options import (
+    PLANNER_SPEC_HELP,
+    add_jobs,
+    add_protocol,
+    positive_int,
+    protocol_of,
+)
 
 if TYPE_CHECKING:
+    from hsqbench.experiment.config import ExperimentConfig
     from hsqbench.experiment.runner import RunSummary
 
 HELP = (
@@ -70,7 +77,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="move an existing run folder aside (<name>.replaced-<time>) and start again",
     )
+    _add_until_arguments(parser)
     parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
+    _add_rerun_arguments(parser)
+
+
+def _add_rerun_arguments(parser: argparse.ArgumentParser) -> None:
+    """--rerun-dir and what it records."""
     parser.add_argument(
         "--rerun-dir",
         type=Path,
@@ -93,6 +106,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_until_arguments(parser: argparse.ArgumentParser) -> None:
+    """--until-halfwidth and its seed cap (:mod:`hsqbench.experiment.until_halfwidth`)."""
+    parser.add_argument(
+        "--until-halfwidth",
+        type=float,
+        default=None,
+        metavar="H",
+        help="add base seeds (after the protocol's) until every planner's GSR interval is at most "
+        "±H (e.g. 0.02), or --max-seeds is reached; recorded in run.json. Resume with the same "
+        "two options",
+    )
+    parser.add_argument(
+        "--max-seeds",
+        type=positive_int,
+        default=10,
+        metavar="N",
+        help="with --until-halfwidth: at most N base seeds in all (default 10)",
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     import sys
 
@@ -100,14 +133,13 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.experiment.backend import TrialRunnerUnavailable
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
-    from hsqbench.experiment.runner import run_benchmark
     from hsqbench.runs import protocol_planners, run_folder
 
     if args.retry_errors and not args.resume:
         raise CommandError("--retry-errors only applies with --resume --run NAME")
     if args.resume and args.run is None:
         raise CommandError("--resume needs --run NAME (the run to continue)")
-    protocol = protocol_of(args)
+    protocol = args.protocol = protocol_of(args)
     config, planners = protocol_planners(load_experiment_config(protocol), args.planners)
     run_dir = run_folder(args.run, protocol)
     if args.resume:
@@ -115,24 +147,19 @@ def run(args: argparse.Namespace) -> int:
     executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)
     try:
-        summary = run_benchmark(
-            config,
-            run_dir,
-            executor=executor,
-            planners=planners,
-            experiments=args.experiments,
-            resume=args.resume,
-            force=args.force,
-            retry_errors=args.retry_errors,
-            config_name=protocol,
-        )
+        summary = _run_trials(args, config, run_dir, executor, planners)
     except TrialRunnerUnavailable as exc:
         raise CommandError(f"cannot run the benchmark: {exc}") from exc
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: finished trials are saved in {run_dir}; continue with\n"
             f"  hsqbench benchmark --protocol {protocol} --run {run_dir} --resume"
-            + (f" --planners {' '.join(args.planners)}" if args.planners else ""),
+            + (f" --planners {' '.join(args.planners)}" if args.planners else "")
+            + (
+                f" --until-halfwidth {args.until_halfwidth} --max-seeds {args.max_seeds}"
+                if args.until_halfwidth is not None
+                else ""
+            ),
             file=sys.stderr,
         )
         return 130
@@ -168,6 +195,44 @@ def _check_resumed_planners(run_dir: Path, planners: tuple[str, ...]) -> None:
             f"{run_dir} was started with the planners {list(recorded)}, this command names "
             f"{list(planners)}; resume it with --planners {' '.join(given)} (or start another --run)"
         )
+
+
+def _run_trials(
+    args: argparse.Namespace,
+    config: ExperimentConfig,
+    run_dir: Path,
+    executor: Any,
+    planners: tuple[str, ...] | list[str],
+) -> RunSummary:
+    """Run the protocol's trials, or with ``--until-halfwidth`` seed after seed."""
+    from hsqbench.experiment.runner import run_benchmark
+
+    forcing = [args.force]  # --force moves an old run aside once, never a step's own results
+
+    def run_seeds(
+        cfg: ExperimentConfig, base_seeds: tuple[int, ...] | None, resume: bool
+    ) -> RunSummary:
+        force, forcing[0] = forcing[0], False
+        return run_benchmark(
+            cfg,
+            run_dir,
+            executor=executor,
+            planners=planners,
+            experiments=args.experiments,
+            resume=resume,
+            force=force,
+            retry_errors=args.retry_errors,
+            config_name=args.protocol,
+            base_seeds=base_seeds,
+        )
+
+    if args.until_halfwidth is None:
+        return run_seeds(config, None, args.resume)
+    from hsqbench.experiment.until_halfwidth import run_until_halfwidth
+
+    return run_until_halfwidth(
+        config, run_dir, args.until_halfwidth, args.max_seeds, run_seeds, args.resume
+    )
 
 
 def print_summary(run_dir: Path, summary: RunSummary, report: bool) -> None:

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from hsqbench.experiment.sweep_config import SweepConfig
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs
+from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, positive_int
 
 HELP = (
     "robustness sweeps: run a protocol at each value of config parameters (depth noise, "
@@ -23,7 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "sweeps",
         nargs="*",
         metavar="SWEEP",
-        help="sweep configs: names in configs/sweeps/ (depth_noise, calibration, cameras, "
+        help="sweep configs: names in configs/protocols/sweeps/ (depth_noise, calibration, cameras, "
         "pad_friction) or YAML paths; or use --param and --values",
     )
     parser.add_argument(
@@ -53,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--attempts-per-object",
-        type=int,
+        type=positive_int,
         default=None,
         metavar="N",
         help="isolated attempts per object and seed at every point (overrides the sweep's)",

@@ -1,4 +1,5 @@
-"""Benchmark protocol: ``configs/paper.yaml`` (and ``quick.yaml``) loaded into frozen dataclasses.
+"""Benchmark protocol: a file of ``configs/protocols/`` (``paper.yaml``, ``quick.yaml``, ...)
+loaded into frozen dataclasses (docs/protocols.md lists them).
 
 An :class:`ExperimentConfig` says *what* is run (objects, attempts, rounds, planners, seeds);
 *how* one trial runs (scene, robot, stop rule of a packed round) belongs to the trial runner's
@@ -157,7 +158,7 @@ class ExperimentConfig:
     """One benchmark protocol.
 
     Attributes:
-        planners: planner names, resolved by the trial runner (``hsqbench.planner.get_planner``).
+        planners: planner names, resolved by the trial runner (``hsqbench.planner.registry.get_planner``).
         seeds: base seeds. Every trial's seed derives from (base seed, experiment, object, index)
             (see :mod:`hsqbench.experiment.seeds`); more base seeds repeat the whole protocol on
             fresh poses and narrow the confidence intervals.

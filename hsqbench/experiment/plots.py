@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from hsqbench.experiment.results import STATUS_OK
-
-if TYPE_CHECKING:
-    from hsqbench.experiment.report import RunData
+from hsqbench.experiment.run_data import RunData
 
 
 def _figure(width: float, height: float) -> Any:

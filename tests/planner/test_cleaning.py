@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hsqbench.planner import plan_grasps
 from hsqbench.planner.cleaning import CleaningConfig, clean_cloud, isolated_mask
 from hsqbench.planner.hsq.config import resolve_config
+from hsqbench.planner.hsq.planner import plan_grasps
 from tests.shapes import Box, Cylinder, union_cloud
 
 CAMERA = np.array([0.62, 0.78, 0.55])

@@ -21,7 +21,9 @@ from tests.fake_backend import FakeBackend
 
 PLANNER = """
 import numpy as np
-from hsqbench.planner import Grasp, PlannerBase, PlanResult
+from hsqbench.planner.api import PlanResult
+from hsqbench.planner.base import PlannerBase
+from hsqbench.planner.grasp import Grasp
 
 class {cls}(PlannerBase):
     name = "{name}"
@@ -96,7 +98,7 @@ def test_a_misspelt_planner_gets_the_closest_name():
 def test_a_planner_without_its_stages_names_the_missing_method(tmp_path):
     path = tmp_path / "half.py"
     path.write_text(
-        "from hsqbench.planner import PlannerBase\n\nclass Half(PlannerBase):\n    name = 'half'\n"
+        "from hsqbench.planner.base import PlannerBase\n\nclass Half(PlannerBase):\n    name = 'half'\n"
     )
     registry.resolve_planner(f"{path}:Half")
     with pytest.raises(plugins.PluginError, match=r"planner .*Half.* cannot be built: .*stages"):

@@ -3,7 +3,8 @@ elimination rules (opted into with ``apply_rules``), the narrowest first."""
 
 import numpy as np
 
-from hsqbench.planner import Grasp, PlannerBase
+from hsqbench.planner.base import PlannerBase
+from hsqbench.planner.grasp import Grasp
 
 
 class TopDownRules(PlannerBase):

@@ -60,9 +60,9 @@ class MotionPlan:
 
 
 def resolve_planner(planner: Any, config: TrialConfig) -> Any:
-    """A planner object from a name (``hsqbench.planner.get_planner``) or the object itself."""
+    """A planner object from a name (``hsqbench.planner.registry.get_planner``) or the object itself."""
     if isinstance(planner, str):
-        from hsqbench.planner import get_planner
+        from hsqbench.planner.registry import get_planner
 
         return get_planner(planner, config.planners.for_planner(planner))
     if not hasattr(planner, "plan"):

@@ -12,7 +12,6 @@ from scipy.spatial.transform import Rotation
 
 from hsqbench.config import from_dict, load_config, to_dict
 from hsqbench.errors import ConfigError
-from hsqbench.planner import plan_grasps
 from hsqbench.planner.api import Planner, PlanningContext
 from hsqbench.planner.baselines.antipodal import AntipodalPlanner, plan_antipodal
 from hsqbench.planner.baselines.config import (
@@ -24,6 +23,7 @@ from hsqbench.planner.baselines.single_sq import SingleSQPlanner, plan_single_sq
 from hsqbench.planner.cleaning import clean_cloud
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.hsq.config import resolve_config
+from hsqbench.planner.hsq.planner import plan_grasps
 from hsqbench.planner.hsq.stage_two.candidates import CandidateSet
 from hsqbench.planner.hsq.stage_two.elimination import eliminate, unobservable_contacts
 from hsqbench.planner.hsq.stage_two.hidden_bodies import body_obstacles

@@ -12,11 +12,10 @@ from scipy.spatial.transform import Rotation
 
 from hsqbench.config import from_dict
 from hsqbench.errors import ConfigError
-from hsqbench.planner import plan_grasps
 from hsqbench.planner.api import PlanningContext, PlanResult
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.hsq.config import PlannerConfig
-from hsqbench.planner.hsq.planner import HSQPlanner, redraw_seed
+from hsqbench.planner.hsq.planner import HSQPlanner, plan_grasps, redraw_seed
 from hsqbench.planner.hsq.stage_two.plan import plan_from_hidden
 from hsqbench.superquadric.fit import alpha_beta
 from hsqbench.superquadric.geometry import Superquadric

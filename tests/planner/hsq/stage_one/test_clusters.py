@@ -7,10 +7,9 @@ import pytest
 
 from hsqbench.config import from_dict
 from hsqbench.errors import ConfigError
-from hsqbench.planner import plan_grasps
 from hsqbench.planner.api import PlanningContext
 from hsqbench.planner.hsq.config import PlannerConfig, RecoveryConfig
-from hsqbench.planner.hsq.planner import HSQPlanner
+from hsqbench.planner.hsq.planner import HSQPlanner, plan_grasps
 from hsqbench.planner.hsq.stage_one.clusters import object_clusters
 from tests.planner.baselines.test_baselines import CAMERAS, TABLE, two_boxes_apart
 

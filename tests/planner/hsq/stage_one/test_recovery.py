@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from hsqbench.planner import (
+from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.planner.hsq.config import RecoveryConfig, load_planner_config
+from hsqbench.planner.hsq.stage_one.recovery import (
     FitResult,
     HiddenSuperquadric,
     fit_superquadric,
     recover_hidden_superquadrics,
+    surface_spacing,
 )
-from hsqbench.planner.downsample import voxel_downsample
-from hsqbench.planner.hsq.config import RecoveryConfig, load_planner_config
-from hsqbench.planner.hsq.stage_one.recovery import surface_spacing
 from hsqbench.superquadric.fit import alpha_beta, point_to_surface_alpha
 from hsqbench.superquadric.geometry import Superquadric
 from tests.shapes import (
