@@ -79,7 +79,7 @@ def test_new_spellings_parse_silently(capsys):
         (["benchmark", "--protocol", "quik"], "no protocol 'quik' (did you mean 'quick'?)"),
         (["benchmark", "--planners", "hqs"], "unknown planner 'hqs' (did you mean 'hsq'?)"),
         (["trial", "--planner", "antipodel", "--object", "mug"], "(did you mean 'antipodal'?)"),
-        (["trial", "--object", "foam_brik"], "unknown object 'foam_brik' (did you mean"),
+        (["trial", "--object", "proc_cylindr"], "(did you mean 'proc_cylinder'?)"),
         (["trial", "--planner", "nowhere.py:X", "--object", "mug"], "no file nowhere.py"),
     ],
 )
