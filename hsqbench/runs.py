@@ -108,6 +108,7 @@ def run_trial(
     Raises:
         ValueError: an unknown planner, object or scene (with the closest name).
     """
+    from hsqbench.assets.on_demand import fetch_missing
     from hsqbench.experiment.config import EXPERIMENTS as SCENES
     from hsqbench.names import check_objects
     from hsqbench.sim.trial import load_trial_config, run_isolated_trial, run_packed_round
@@ -116,7 +117,9 @@ def run_trial(
         raise ValueError(f"scene must be one of {list(SCENES)}, got {scene!r}")
     if (scene == "isolated") != (object is not None) or (scene == "isolated" and objects):
         raise ValueError("give object= for an isolated trial, objects= (or none) for a round")
-    check_objects([object] if object is not None else list(objects or ()))
+    named = [object] if object is not None else list(objects or ())
+    fetch_missing(named)  # YCB objects not downloaded yet, as `hsqbench trial` does
+    check_objects(named)
     name = _planner_name(planner, in_process=True)
     config = load_trial_config(trial_config)
     recorder = None

@@ -118,3 +118,11 @@ def test_positive_int_accepts_whole_numbers_from_one():
     for bad in ("0", "-2", "1.5"):
         with pytest.raises(argparse.ArgumentTypeError):
             _options.positive_int(bad)
+
+
+def test_every_built_in_planner_has_its_line():
+    from hsqbench.planner.hsq.additions import ablation_planners
+    from hsqbench.planner.registry import DESCRIPTIONS, is_builtin, planner_names
+
+    builtin = {n for n in planner_names() if is_builtin(n)} - set(ablation_planners())
+    assert builtin <= set(DESCRIPTIONS), builtin - set(DESCRIPTIONS)

@@ -26,6 +26,7 @@ CLASSES = {
     "scene": "hsqbench.sim.scene:SceneConfig",
     "trial": "hsqbench.sim.trial:TrialConfig",
     "viewer": "hsqbench.viz.config:ViewerConfig",
+    "volumetric": "hsqbench.planner.learned.volumetric_config:VolumetricConfig",
 }
 #: Files that are not one class's defaults: variants that extend another file. The protocols
 #: (configs/protocols/, whose object lists and sizes are the experiment itself) are tested in

@@ -60,6 +60,43 @@ def test_the_unseen_object_protocol_holds_no_paper_object():
     assert "oracle" in cfg.planners
 
 
+def test_a_protocol_runs_only_the_experiments_it_names(tmp_path, capsys):
+    from hsqbench.experiment.config import load_experiment_config
+
+    path = tmp_path / "mine.yaml"
+    path.write_text("planners: [hsq]\nseeds: [0]\nisolated: {objects: [proc_box]}\n")
+    config = load_experiment_config(path)
+    assert config.enabled_experiments() == ("isolated",)  # not the paper's 15 packed rounds
+    assert config.object_names() == ("proc_box",)
+    assert capsys.readouterr().err == ""  # every default that matters was stated
+
+
+def test_a_protocol_says_which_defaults_it_took(tmp_path, capsys):
+    from hsqbench.experiment.config import load_experiment_config
+
+    path = tmp_path / "mine.yaml"
+    path.write_text("packed: {objects: [proc_box, proc_cylinder], objects_per_round: 2}\n")
+    config = load_experiment_config(path)
+    assert config.enabled_experiments() == ("packed",)
+    assert capsys.readouterr().err == (
+        "mine.yaml: not stated, default taken: planners ['hsq', 'single-sq', 'antipodal']; "
+        "seeds [0]\n"
+    )
+
+
+def test_a_protocol_naming_no_experiment_is_refused(tmp_path):
+    from hsqbench.experiment.config import load_experiment_config
+
+    path = tmp_path / "mine.yaml"
+    path.write_text("planners: [hsq]\nseeds: [0]\n")
+    with pytest.raises(ConfigError) as err:
+        load_experiment_config(path)
+    assert str(err.value) == (
+        "mine.yaml names no experiment: add a section for one of ['isolated', 'packed', "
+        "'pile'], e.g. isolated: {objects: [mug], attempts_per_object: 1}"
+    )
+
+
 PROTOCOLS = sorted(p.stem for p in PROTOCOL_DIR.glob("*.yaml"))
 
 

@@ -36,7 +36,6 @@ LONG_FUNCTIONS = {
     "hsqbench/commands/sweep.py:add_arguments": 73,
     "hsqbench/planner/hsq/stage_two/elimination.py:eliminate": 71,
     "hsqbench/sim/perception.py:observe": 64,
-    "hsqbench/viz/rrd.py:read_recording": 64,
 }
 
 

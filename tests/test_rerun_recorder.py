@@ -13,6 +13,7 @@ import pytest
 
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.hsq.stage_two.candidates import REJECTION_REASONS
+from hsqbench.sim.outcome import WALL_CLOCK_FIELDS
 from hsqbench.sim.recorder import Recorder
 from hsqbench.viz.colors import NO_SCORE_COLOR, REASON_COLORS, score_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
@@ -26,8 +27,10 @@ OBJECT, SEED = "proc_box", 0
 
 def _outcomes(result) -> list[dict]:
     """The attempts without wall-clock timings (which differ from run to run)."""
-    drop = ("perception_s", "planning_s", "execution_s")
-    return [{k: v for k, v in a.to_dict().items() if k not in drop} for a in result.attempts]
+    return [
+        {k: v for k, v in a.to_dict().items() if k not in WALL_CLOCK_FIELDS}
+        for a in result.attempts
+    ]
 
 
 @pytest.fixture(scope="module")

@@ -62,10 +62,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _check_names(args: argparse.Namespace) -> None:
+    from hsqbench.assets.on_demand import fetch_missing
     from hsqbench.cli import CommandError
     from hsqbench.planner.registry import resolve_planner
 
     args.planner = resolve_planner(args.planner)  # a spec is registered; unknown: did you mean
+    # YCB objects not downloaded yet are fetched first, as `benchmark` does (without HSQ_YCB_DIR).
+    fetch_missing([args.object] if args.object else (args.objects or []))
     if args.scene == "isolated":
         if args.objects:
             raise CommandError("--objects is for --scene packed; use --object for one object")

@@ -85,6 +85,11 @@ class PlanningContext:
             known (ignored by the hsq planner).
         truth: simulator truth (:class:`~hsqbench.planner.truth.SceneTruth`), given only to
             planners that declare ``privileged = True`` (the oracle); None for every other.
+        scene: the scene kind, ``isolated``, ``packed`` or ``pile``, if known (the vgn and
+            giga planners pick their weights by it).
+        depth_views: the depth images the cloud was made from, if known: objects with
+            ``depth_m`` (H, W), ``K`` (3, 3) and ``T_world_camera`` (4, 4)
+            (:class:`~hsqbench.sim.perceived.CameraView`; the vgn and giga planners fuse them).
     """
 
     support_plane: tuple[float, float, float, float] | None = None
@@ -93,6 +98,8 @@ class PlanningContext:
     camera_positions: NDArray[np.float64] | None = None
     workspace_bounds: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
     truth: Any = None
+    scene: str | None = None
+    depth_views: tuple[Any, ...] | None = None
 
     def __post_init__(self) -> None:
         plane = validate_plane(self.support_plane)
@@ -128,6 +135,8 @@ class PlanResult:
         planner: the planner's name.
         n_removed: input points the planner discarded before planning (the hsq planner's
             cleaning of isolated points, :mod:`hsqbench.planner.cleaning`).
+        surface_points: (N, 3) the planner's own surface model as points, world metres, for
+            display (the vgn and giga planners' TSDF zero crossings); None for the others.
     """
 
     grasps: Sequence[Grasp]
@@ -139,6 +148,7 @@ class PlanResult:
     reason: str = ""
     planner: str = "hsq"
     n_removed: int = 0
+    surface_points: NDArray[np.float64] | None = None
 
     @property
     def best(self) -> Grasp | None:

@@ -68,12 +68,26 @@ def _contact_graspnet(config: Any = None, *, eliminate: bool = False) -> Planner
     return ContactGraspNetPlanner(config, eliminate=eliminate, name=name)
 
 
+def _volumetric(network: str) -> PlannerFactory:
+    """VGN or GIGA (optional extra ``learned``, torch only; hsqbench.planner.learned.volumetric)."""
+
+    def factory(config: Any = None) -> Planner:
+        from hsqbench.planner.learned.volumetric import VolumetricPlanner
+
+        return VolumetricPlanner(network, config)
+
+    return factory
+
+
 _FACTORIES: dict[str, PlannerFactory] = {
     "hsq": _hsq,
     "single-sq": _single_sq,
     "antipodal": _antipodal,
     "contact-graspnet": _contact_graspnet,
     "contact-graspnet-elim": lambda config=None: _contact_graspnet(config, eliminate=True),
+    # The volumetric learned baselines with their published weights (configs/volumetric.yaml).
+    "vgn": _volumetric("vgn"),
+    "giga": _volumetric("giga"),
     # The paper's rules alone, and hsq with one addition off (the ablation planners).
     "hsq-paper": _hsq_without(tuple(AdditionsConfig.names()), "hsq-paper"),
     **{name: _hsq_without((addition,), name) for name, addition in ablation_planners().items()},
@@ -106,6 +120,8 @@ DESCRIPTIONS: dict[str, str] = {
     "contact-graspnet": "learned baseline: Contact-GraspNet (Sundermeyer et al., ICRA 2021)",
     "contact-graspnet-elim": "Contact-GraspNet's grasps through the harness's elimination rules",
     "oracle": "privileged ceiling: plans on the true meshes, not the cloud",
+    "vgn": "learned baseline: VGN (Breyer et al., CoRL 2020) on a TSDF of the depth images",
+    "giga": "learned baseline: GIGA (Jiang et al., RSS 2021) on a TSDF of the depth images",
 }
 
 #: The planners of hsqbench itself (the others come from plugins: :mod:`.plugins`).
@@ -122,6 +138,10 @@ def unavailable(name: str) -> str | None:
         from hsqbench.planner.learned.network import INSTALL_HINT, available
 
         return None if available() else INSTALL_HINT
+    if name in ("vgn", "giga") and name in _FACTORIES:
+        from hsqbench.planner.learned import volumetric
+
+        return None if volumetric.available() else volumetric.INSTALL_HINT
     return None
 
 
@@ -184,8 +204,8 @@ def get_planner(name: str, config: Any = None) -> Planner:
 
     Raises:
         ValueError: unknown ``name``; the message lists the registered names.
-        LearnedExtraMissing: (a RuntimeError) ``contact-graspnet*`` without the ``learned``
-            extra; the message says how to install it.
+        LearnedExtraMissing: (a RuntimeError) ``contact-graspnet*``, ``vgn`` or ``giga``
+            without the ``learned`` extra; the message says how to install it.
     """
     return _factory(resolve_planner(name))(config)
 
