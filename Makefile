@@ -85,7 +85,7 @@ assets: $(STAMP)
 CONFIG ?= paper
 RUN ?= $(CONFIG)
 benchmark: $(STAMP)
-	$(PY) -m hsqbench.cli benchmark --config $(CONFIG) --run $(RUN) --jobs $(JOBS) --resume
+	$(PY) -m hsqbench.cli benchmark --protocol $(CONFIG) --run $(RUN) --jobs $(JOBS) --resume
 	@rm -rf results/latest && cp -r results/$(RUN) results/latest && rm -f results/latest/.lock
 	@echo "tables: results/latest/tables.md (copied from results/$(RUN))"
 

@@ -121,7 +121,7 @@ def test_cli_import_list_and_build(meshes, capsys, monkeypatch):
     rc = main(
         [
             "assets",
-            "--config",
+            "--assets-config",
             str(path),
             "import",
             str(meshes),
@@ -137,7 +137,7 @@ def test_cli_import_list_and_build(meshes, capsys, monkeypatch):
     out = capsys.readouterr().out
     assert "registered 2 object(s): block_1, tall_can" in out
     assert "block_1" in out and "2 objects ready" in out
-    assert main(["assets", "--config", str(path), "list", "--source", "imported"]) == 0
+    assert main(["assets", "--assets-config", str(path), "list", "--source", "imported"]) == 0
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("block_1"))
     assert row.split()[1:3] == ["imported", f"{600 * 0.04 * 0.06 * 0.08:.3f}"]

@@ -24,7 +24,7 @@ pytestmark = pytest.mark.skipif(
 
 
 def _benchmark(run_dir: Path, *extra: str) -> subprocess.CompletedProcess:
-    cmd = [sys.executable, "-m", "hsqbench.cli", "benchmark", "--config", "quick"]
+    cmd = [sys.executable, "-m", "hsqbench.cli", "benchmark", "--protocol", "quick"]
     cmd += ["--run", str(run_dir), "--jobs", "2", *extra]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=600, check=False)
 

@@ -19,7 +19,7 @@ from tests.ycb_server import archives, serve
 
 def _benchmark(run_dir: Path, env: dict[str, str]) -> subprocess.CompletedProcess:
     # The command of `make benchmark CONFIG=quick`.
-    cmd = [sys.executable, "-m", "hsqbench.cli", "benchmark", "--config", "quick"]
+    cmd = [sys.executable, "-m", "hsqbench.cli", "benchmark", "--protocol", "quick"]
     cmd += ["--run", str(run_dir), "--jobs", "2", "--resume"]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=900, env=env, check=False)
 

@@ -73,7 +73,7 @@ def test_the_command_runs_the_benchmark_with_that_list(monkeypatch, tmp_path) ->
     code = main(
         [
             "ablate",
-            "--config",
+            "--protocol",
             "quick",
             "--run",
             str(run),

@@ -61,7 +61,7 @@ def test_a_failed_object_is_named_and_the_exit_code_says_so(tmp_path, cache, cap
     assert main(["assets", "import", str(folder), "--no-build"]) == 0
     fast = tmp_path / "fast.yaml"  # low CoACD effort (a config file replaces the whole config)
     fast.write_text("coacd: {preprocess_resolution: 20, mcts_iterations: 20, mcts_nodes: 10}\n")
-    rc = main(["assets", "--config", str(fast), "build", "flat", "block", "--jobs", "1"])
+    rc = main(["assets", "--assets-config", str(fast), "build", "flat", "block", "--jobs", "1"])
     captured = capsys.readouterr()
     assert rc == 1, captured.err
     assert "block" in captured.out and "1 objects ready" in captured.out

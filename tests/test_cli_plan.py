@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -158,3 +159,11 @@ def test_missing_file_unknown_planner_and_no_grasp(tmp_path, capsys) -> None:
     assert "choose one of" in capsys.readouterr().err
     assert main(["plan", str(path), "--planner", "test-centroid"]) == 1
     assert "no grasp: fewer than 10 points" in capsys.readouterr().out
+
+
+def test_the_example_planner_plans_from_its_file(tmp_path, capsys) -> None:
+    path = write_cloud(tmp_path / "box.npy", box_cloud(1))
+    spec = str(Path(__file__).resolve().parents[1] / "examples/topdown.py") + ":TopDown"
+    assert main(["plan", str(path), "--planner", spec, "--support-plane", "0", "0", "1", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "1 grasps; best 1:" in out and "time: cleaning" in out

@@ -194,7 +194,7 @@ def test_benchmark_command_says_when_the_trial_runner_is_missing(tmp_path, monke
     from hsqbench.cli import main
 
     monkeypatch.setitem(sys.modules, "hsqbench.sim.trial", None)  # import fails
-    code = main(["benchmark", "--config", "quick", "--run", str(tmp_path / "q"), "--jobs", "1"])
+    code = main(["benchmark", "--protocol", "quick", "--run", str(tmp_path / "q"), "--jobs", "1"])
     err = capsys.readouterr().err
     assert code == 2
     assert "trial runner" in err and "not available" in err and "no trial was run" in err
@@ -208,7 +208,7 @@ def test_benchmark_command_argument_errors(tmp_path, capsys) -> None:
     assert "--run NAME" in capsys.readouterr().err
     assert main(["benchmark", "--retry-errors", "--run", str(tmp_path / "x")]) == 2
     assert "--resume" in capsys.readouterr().err
-    assert main(["benchmark", "--config", "nope", "--run", str(tmp_path / "x")]) == 2
+    assert main(["benchmark", "--protocol", "nope", "--run", str(tmp_path / "x")]) == 2
     assert "nope" in capsys.readouterr().err
 
 
@@ -222,7 +222,7 @@ def test_benchmark_command_end_to_end_with_a_stand_in_backend(tmp_path, monkeypa
     backends = iter([FakeBackend(interrupt_after=1), FakeBackend(raise_on=("foam_brick",))])
     monkeypatch.setattr(runner_module, "SimBackend", lambda name: next(backends))
     run_dir = tmp_path / "quick"
-    args = ["benchmark", "--config", "quick", "--run", str(run_dir), "--jobs", "1"]
+    args = ["benchmark", "--protocol", "quick", "--run", str(run_dir), "--jobs", "1"]
     assert main(args) == 130
     assert "--resume" in capsys.readouterr().err
     with warnings.catch_warnings():

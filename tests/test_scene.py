@@ -262,7 +262,7 @@ def test_scene_command_writes_a_picture(tmp_path) -> None:
     from hsqbench.cli import main
 
     out = tmp_path / "scene.png"
-    code = main(["scene", "--kind", "isolated", "--objects", "proc_cylinder", "--png", str(out)])
+    code = main(["scene", "--scene", "isolated", "--objects", "proc_cylinder", "--png", str(out)])
     assert code == 0
     image = np.asarray(Image.open(out).convert("RGB"), dtype=float)
     world = mujoco.MjModel.from_xml_path(str(world_path(load_scene_config())))

@@ -155,7 +155,7 @@ def test_scene_command_builds_a_pile(tmp_path, capsys) -> None:
     out, xml = tmp_path / "pile.png", tmp_path / "mjcf"
     args = [
         "scene",
-        "--kind",
+        "--scene",
         "pile",
         "--objects",
         *OBJECTS[:3],

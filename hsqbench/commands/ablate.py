@@ -12,16 +12,13 @@ import argparse
 import dataclasses
 from pathlib import Path
 
+from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, add_protocol, protocol_of
+
 HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions off in turn"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--config",
-        default="paper",
-        help="protocol: a name in configs/protocols/ (paper, paper3, ycb, ...) or a YAML path "
-        "(default: paper)",
-    )
+    add_protocol(parser)
     parser.add_argument(
         "--run", default=None, metavar="NAME", help="run name under results/ (or a folder path)"
     )
@@ -39,12 +36,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs="+",
         default=(),
         metavar="PLANNER",
-        help="other planners to run alongside, e.g. antipodal",
+        help=f"other planners to run alongside, e.g. antipodal: {PLANNER_SPEC_HELP}",
     )
-    parser.add_argument("--jobs", type=int, default=None, help="worker processes")
-    parser.add_argument("--executor", choices=("local", "ray"), default="local")
+    add_jobs(parser)
     parser.add_argument(
-        "--experiments", nargs="+", choices=("isolated", "packed", "pile"), default=None
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
+    )
+    parser.add_argument(
+        "--experiments",
+        nargs="+",
+        choices=("isolated", "packed", "pile"),
+        default=None,
+        help="only these experiments",
     )
     parser.add_argument("--resume", action="store_true", help="continue the run --run NAME")
     parser.add_argument("--force", action="store_true", help="move an existing run folder aside")
@@ -100,17 +106,20 @@ def run(args: argparse.Namespace) -> int:
     import sys
 
     from hsqbench.cli import CommandError
-    from hsqbench.commands.benchmark import _run_dir
     from hsqbench.experiment.backend import TrialRunnerUnavailable
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
     from hsqbench.experiment.runner import run_benchmark
+    from hsqbench.runs import run_folder
 
     if args.resume and args.run is None:
         raise CommandError("--resume needs --run NAME (the run to continue)")
-    planners = ablation_planner_list(args.additions, tuple(args.extra))
-    config = dataclasses.replace(load_experiment_config(args.config), planners=tuple(planners))
-    run_dir = _run_dir(args.run, f"ablate-{Path(args.config).stem}")
+    from hsqbench.planner.registry import resolve_planners
+
+    protocol = protocol_of(args)
+    planners = ablation_planner_list(args.additions, tuple(resolve_planners(args.extra)))
+    config = dataclasses.replace(load_experiment_config(protocol), planners=tuple(planners))
+    run_dir = run_folder(args.run, f"ablate-{Path(protocol).stem}")
     print(f"run folder: {run_dir}; planners: {', '.join(planners)}", file=sys.stderr)
     try:
         summary = run_benchmark(
@@ -120,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
             experiments=args.experiments,
             resume=args.resume,
             force=args.force,
-            config_name=f"{args.config} (ablation)",
+            config_name=f"{protocol} (ablation)",
         )
     except TrialRunnerUnavailable as exc:
         raise CommandError(f"cannot run the ablation: {exc}") from exc

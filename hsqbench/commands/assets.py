@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+from hsqbench.commands._options import add_jobs, deprecated
+
 HELP = "list, build, download (YCB, CC BY 4.0) or import the objects of the library"
 
 _EPILOG = """\
@@ -24,8 +26,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = _EPILOG
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
     parser.add_argument(
-        "--config", default="assets", help="assets config (name in configs/ or a YAML path)"
+        "--assets-config",
+        default="assets",
+        metavar="NAME",
+        help="the object library's config: a name in configs/ or a YAML path (default: assets)",
     )
+    deprecated(parser, "--config", "--assets-config", "assets_config")
     sub = parser.add_subparsers(dest="assets_command", metavar="ACTION", required=True)
 
     p = sub.add_parser(
@@ -57,7 +63,7 @@ def _add_build(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="every object of it")
     p.add_argument("--all", action="store_true", help="every object of the library")
-    p.add_argument("--jobs", type=int, default=None, help="objects built at once (default: config)")
+    add_jobs(p, "objects built at once", "assets config's jobs")
 
 
 def _add_download(sub: argparse._SubParsersAction) -> None:
@@ -96,7 +102,12 @@ def _add_download(sub: argparse._SubParsersAction) -> None:
 def _add_import(sub: argparse._SubParsersAction) -> None:
     """``assets import``: a folder of meshes and how to read them."""
     p = sub.add_parser("import", help="register (and build) a folder of meshes (obj/stl/ply)")
-    p.add_argument("folder", type=Path, metavar="DIR")
+    p.add_argument(
+        "folder",
+        type=Path,
+        metavar="DIR",
+        help="a folder of .obj, .stl or .ply meshes (searched recursively), one object each",
+    )
     p.add_argument(
         "--density", type=float, default=None, help="kg/m^3 (default: importer.density_kg_m3)"
     )
@@ -114,13 +125,13 @@ def _add_import(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--prefix", default="", help="prepended to every object name")
     p.add_argument("--no-build", action="store_true", help="only register the meshes")
-    p.add_argument("--jobs", type=int, default=None, help="objects built at once (default: config)")
+    add_jobs(p, "objects built at once", "assets config's jobs")
 
 
 def run(args: argparse.Namespace) -> int:
     from hsqbench.assets.config import load_assets_config
 
-    config = load_assets_config(args.config)
+    config = load_assets_config(args.assets_config or "assets")
     action = args.assets_command
     if action == "list":
         return _list(config, args.source)

@@ -6,31 +6,32 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from hsqbench.commands._options import (
+    PLANNER_SPEC_HELP,
+    add_jobs,
+    add_protocol,
+    positive_int,
+    protocol_of,
+)
+
 if TYPE_CHECKING:
     from hsqbench.experiment.config import ExperimentConfig
     from hsqbench.experiment.runner import RunSummary
 
-HELP = "run the isolated and packed experiments of a protocol config and write results/<run>/"
+HELP = (
+    "run the experiments of a benchmark protocol with its planners (or yours) into results/<run>/"
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--config",
-        default="paper",
-        help="protocol: paper, ycb, quick... (configs/protocols/) or a YAML path; default paper",
-    )
+    add_protocol(parser)
     parser.add_argument(
         "--run",
         default=None,
         metavar="NAME",
-        help="run name under results/ (or a folder path); default <config>-<UTC time>",
+        help="run name under results/ (or a folder path); default <protocol>-<UTC time>",
     )
-    parser.add_argument(
-        "--jobs",
-        type=int,
-        default=None,
-        help="worker processes (default: the cores available; 1 runs in this process)",
-    )
+    add_jobs(parser)
     parser.add_argument(
         "--executor",
         choices=("local", "ray"),
@@ -46,7 +47,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "same HSQ_* paths",
     )
     parser.add_argument(
-        "--planners", nargs="+", default=None, metavar="NAME", help="only these planners"
+        "--planners",
+        nargs="+",
+        default=None,
+        metavar="PLANNER",
+        help="run these planners on the protocol's scenes (default: the protocol's own): "
+        f"{PLANNER_SPEC_HELP}. One the protocol lacks joins its planner list (a run of its own)",
     )
     parser.add_argument(
         "--experiments",
@@ -113,24 +119,11 @@ def _add_until_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--max-seeds",
-        type=int,
+        type=positive_int,
         default=10,
         metavar="N",
         help="with --until-halfwidth: at most N base seeds in all (default 10)",
     )
-
-
-def _run_dir(run: str | None, config: str) -> Path:
-    from datetime import UTC, datetime
-
-    from hsqbench.settings import RESULTS_DIR
-
-    if run is None:
-        stem = Path(config).stem if config.endswith((".yaml", ".yml")) else config
-        return RESULTS_DIR / f"{stem}-{datetime.now(UTC).strftime('%Y%m%d-%H%M%S')}"
-    if "/" in run or run in (".", ".."):
-        return Path(run)
-    return RESULTS_DIR / run
 
 
 def run(args: argparse.Namespace) -> int:
@@ -140,18 +133,17 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.experiment.backend import TrialRunnerUnavailable
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
+    from hsqbench.runs import protocol_planners, run_folder
 
     if args.retry_errors and not args.resume:
         raise CommandError("--retry-errors only applies with --resume --run NAME")
     if args.resume and args.run is None:
         raise CommandError("--resume needs --run NAME (the run to continue)")
-    config = load_experiment_config(args.config)
-    planners = args.planners
-    if planners is None:  # the protocol's planners, less optional ones whose extra is missing
-        from hsqbench.planner.registry import runnable
-
-        planners = runnable(config.planners)
-    run_dir = _run_dir(args.run, args.config)
+    protocol = args.protocol = protocol_of(args)
+    config, planners = protocol_planners(load_experiment_config(protocol), args.planners)
+    run_dir = run_folder(args.run, protocol)
+    if args.resume:
+        _check_resumed_planners(run_dir, config.planners)
     executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)
     try:
@@ -161,7 +153,8 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: finished trials are saved in {run_dir}; continue with\n"
-            f"  hsqbench benchmark --config {args.config} --run {run_dir} --resume"
+            f"  hsqbench benchmark --protocol {protocol} --run {run_dir} --resume"
+            + (f" --planners {' '.join(args.planners)}" if args.planners else "")
             + (
                 f" --until-halfwidth {args.until_halfwidth} --max-seeds {args.max_seeds}"
                 if args.until_halfwidth is not None
@@ -181,6 +174,27 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def _check_resumed_planners(run_dir: Path, planners: tuple[str, ...]) -> None:
+    """A resumed run keeps its planner list: say which --planners give it back."""
+    import json
+
+    from hsqbench.cli import CommandError
+
+    path = run_dir / "run.json"
+    if not path.is_file():
+        return
+    recorded = tuple(json.loads(path.read_text()).get("config", {}).get("planners", ()))
+    if recorded and recorded != planners:
+        sources = json.loads(path.read_text()).get("backend", {}).get("planner_sources", {})
+        given = [
+            sources[p]["spec"] if sources.get(p, {}).get("kind") == "file" else p for p in recorded
+        ]
+        raise CommandError(
+            f"{run_dir} was started with the planners {list(recorded)}, this command names "
+            f"{list(planners)}; resume it with --planners {' '.join(given)} (or start another --run)"
+        )
 
 
 def _run_trials(
@@ -208,7 +222,7 @@ def _run_trials(
             resume=resume,
             force=force,
             retry_errors=args.retry_errors,
-            config_name=args.config,
+            config_name=args.protocol,
             base_seeds=base_seeds,
         )
 

@@ -6,6 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
+from hsqbench.commands._options import PLANNER_SPEC_HELP, deprecated
+
 HELP = "plan grasps on a point cloud (.ply, .pcd, .npy, .xyz) and print the best ones"
 
 _EPILOG = """\
@@ -34,8 +36,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the result as JSON here")
     parser.add_argument(
-        "--config", default=None, metavar="PATH", help="planner config (name in configs/ or YAML)"
+        "--planner-config",
+        default=None,
+        metavar="NAME",
+        help="the planner's config: a name in configs/ or a YAML path (default: its own)",
     )
+    deprecated(parser, "--config", "--planner-config", "planner_config")
     parser.add_argument("--seed", type=int, default=None, metavar="N", help="planner seed")
     parser.add_argument(
         "--support-plane",
@@ -53,7 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="a camera centre in the cloud's frame, metres (repeat for each camera)",
     )
     parser.add_argument(
-        "--planner", default="hsq", metavar="NAME", help="registered planner (default: hsq)"
+        "--planner", default="hsq", metavar="PLANNER", help=f"{PLANNER_SPEC_HELP} (default: hsq)"
     )
 
 
@@ -90,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.settings import code_version
 
     points = read_cloud(args.cloud)
-    planner = get_planner(args.planner, args.config)
+    planner = get_planner(args.planner, args.planner_config)
     context = PlanningContext(
         support_plane=tuple(args.support_plane) if args.support_plane else None,
         packed=args.packed,
@@ -115,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         out["input"] = {
             "cloud": str(args.cloud),
             "n_points": int(points.shape[0]),
-            "config": args.config,
+            "config": args.planner_config,
             "seed": args.seed,
             "packed": args.packed,
             "support_plane": context.support_plane,

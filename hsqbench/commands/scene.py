@@ -5,16 +5,19 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from hsqbench.commands._options import SCENES, add_scene, deprecated
+from hsqbench.names import check_objects
+
 HELP = "build an isolated, packed or pile scene, print what it holds, render it to a PNG or export it as MJCF"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--kind",
-        choices=("isolated", "packed", "pile"),
-        default="packed",
-        help="packed: objects standing apart; pile: dropped into a box, the box removed",
+    add_scene(
+        parser,
+        "packed",
+        "packed: objects standing apart; pile: dropped into a box, the box removed",
     )
+    deprecated(parser, "--kind", "--scene", "scene", choices=SCENES)
     parser.add_argument("--seed", type=int, default=0, help="the same seed gives the same scene")
     parser.add_argument(
         "--objects",
@@ -23,7 +26,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="object names (default: drawn by seed from the 15 YCB objects)",
     )
-    parser.add_argument("--png", type=Path, default=None, help="write a picture here")
+    parser.add_argument(
+        "--png", type=Path, default=None, metavar="OUT.png", help="write a picture here"
+    )
     parser.add_argument(
         "--xml",
         type=Path,
@@ -62,8 +67,9 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.sim.scene import build_scene_spec
 
     if args.objects:
+        check_objects(args.objects)
         fetch_missing(args.objects)  # YCB objects not downloaded yet (only without HSQ_YCB_DIR)
-    spec, model, data, info = build_scene_spec(args.kind, args.objects, seed=args.seed)
+    spec, model, data, info = build_scene_spec(args.scene, args.objects, seed=args.seed)
     print(f"{info.kind} scene, seed {info.seed}: {', '.join(info.objects)}")
     for name in info.objects:
         x, y, z = info.initial_poses[name][:3]

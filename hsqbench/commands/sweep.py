@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from hsqbench.experiment.sweep_config import SweepConfig
 
+from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, positive_int
+
 HELP = (
     "robustness sweeps: run a protocol at each value of config parameters (depth noise, "
     "calibration, cameras, friction, ...) and plot GSR against the value per planner"
@@ -51,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--attempts-per-object",
-        type=int,
+        type=positive_int,
         default=None,
         metavar="N",
         help="isolated attempts per object and seed at every point (overrides the sweep's)",
@@ -60,8 +62,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--planners",
         nargs="+",
         default=None,
-        metavar="NAME",
-        help="run only these planners (the sweep's others can be added later to the same runs)",
+        metavar="PLANNER",
+        help="run only these planners (the sweep's others can be added later to the same runs); "
+        f"{PLANNER_SPEC_HELP}, which joins the sweep's list (new runs)",
     )
     parser.add_argument(
         "--seeds",
@@ -80,8 +83,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="sweep folder under results/ or a path (default results/sweeps); rerunning resumes",
     )
-    parser.add_argument("--jobs", type=int, default=None, help="worker processes")
-    parser.add_argument("--executor", choices=("local", "ray"), default="local")
+    _add_execution(parser)
+
+
+def _add_execution(parser: argparse.ArgumentParser) -> None:
+    """How the sweep runs: workers, executor, errors, report only."""
+    add_jobs(parser)
+    parser.add_argument(
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
+    )
     parser.add_argument(
         "--retry-errors", action="store_true", help="run again trials recorded as errors"
     )
@@ -176,6 +189,10 @@ def run(args: argparse.Namespace) -> int:
         written = write_sweep_report(root)
         print(f"sweep report: {written[0]} (+{len(written) - 1} plots)")
         return 0
+    if args.planners:  # names, or plugin specs registered here (and in the workers)
+        from hsqbench.planner.registry import resolve_planners
+
+        args.planners = resolve_planners(args.planners)
     sweeps = _sweeps(args)
     executor = make_executor(args.executor, args.jobs)
     errors = 0

@@ -6,6 +6,9 @@ import argparse
 import json
 from pathlib import Path
 
+from hsqbench.commands._options import PLANNER_SPEC_HELP, add_scene, deprecated
+from hsqbench.names import check_objects
+
 HELP = "run one grasp trial (isolated object) or one packed round in the simulator"
 
 _EPILOG = """\
@@ -28,9 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--object", default=None, metavar="NAME", help="object of an isolated trial"
     )
     parser.add_argument("--seed", type=int, default=0, metavar="N", help="the trial's seed")
-    parser.add_argument(
-        "--scene", choices=("isolated", "packed", "pile"), default="isolated", help="kind of trial"
-    )
+    add_scene(parser, "isolated", "kind of trial: one object, or a packed or pile round")
     parser.add_argument(
         "--objects",
         nargs="+",
@@ -38,13 +39,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="objects of a packed round (default: drawn by the seed)",
     )
-    parser.add_argument("--planner", default="hsq", metavar="NAME", help="registered planner")
     parser.add_argument(
-        "--config",
-        default="trial",
-        metavar="PATH",
+        "--planner", default="hsq", metavar="PLANNER", help=f"{PLANNER_SPEC_HELP} (default: hsq)"
+    )
+    parser.add_argument(
+        "--trial-config",
+        default=None,
+        metavar="NAME",
         help="trial config: a name in configs/ or a YAML path (default: trial)",
     )
+    deprecated(parser, "--config", "--trial-config", "trial_config")
     parser.add_argument(
         "--sensor",
         choices=("cameras", "surface"),
@@ -58,34 +62,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _check_names(args: argparse.Namespace) -> None:
-    from hsqbench.assets.library import object_names
     from hsqbench.assets.on_demand import fetch_missing
     from hsqbench.cli import CommandError
-    from hsqbench.planner.registry import planner_names
+    from hsqbench.planner.registry import resolve_planner
 
+    args.planner = resolve_planner(args.planner)  # a spec is registered; unknown: did you mean
     # YCB objects not downloaded yet are fetched first, as `benchmark` does (without HSQ_YCB_DIR).
     fetch_missing([args.object] if args.object else (args.objects or []))
-
-    if args.planner not in planner_names():
-        raise CommandError(
-            f"unknown planner {args.planner!r}; choose one of: {', '.join(planner_names())}"
-        )
-    known = object_names()
     if args.scene == "isolated":
         if args.objects:
             raise CommandError("--objects is for --scene packed; use --object for one object")
         if args.object is None:
             raise CommandError(
-                f"--object is required for an isolated trial; choose one of: {', '.join(known)}"
+                "--object is required for an isolated trial (`hsqbench assets list` shows them)"
             )
         wanted = [args.object]
     else:
         if args.object is not None:
             raise CommandError("--object is for isolated trials; use --objects with --scene packed")
         wanted = args.objects or []
-    unknown = [n for n in wanted if n not in known]
-    if unknown:
-        raise CommandError(f"unknown object(s) {unknown}; choose from: {', '.join(known)}")
+    check_objects(wanted)
 
 
 def _recorder(path: Path | None):
@@ -113,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.sim.trial import load_trial_config, run_isolated_trial, run_packed_round
 
     _check_names(args)
-    config = load_trial_config(args.config)
+    config = load_trial_config(args.trial_config or "trial")
     if args.sensor is not None:
         config = replace(config, sensor=args.sensor)
     recorder = _recorder(args.rerun)

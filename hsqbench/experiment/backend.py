@@ -164,15 +164,34 @@ class SimBackend:
 
     def __post_init__(self) -> None:
         self._config: Any = None
+        self._specs: tuple[tuple[str, str], ...] | None = None
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"trial_config": self.trial_config, "name": self.name, "overrides": self.overrides}
+        from hsqbench.planner.registry import specs_of
+
+        return {
+            "trial_config": self.trial_config,
+            "name": self.name,
+            "overrides": self.overrides,
+            # Planners plugged in from a spec (a file, a module) travel to the workers, which
+            # register them again (entry points they find themselves).
+            "plugin_specs": specs_of(),
+        }
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.trial_config = state["trial_config"]
         self.name = state["name"]
         self.overrides = tuple(state.get("overrides", ()))
         self._config = None
+        self._specs = tuple(state.get("plugin_specs", ()))
+
+    def _register_plugins(self) -> None:
+        """In a worker: register the run's planners plugged in from specs (once)."""
+        if self._specs:
+            from hsqbench.planner.registry import register_specs
+
+            register_specs(self._specs)
+            self._specs = ()
 
     @staticmethod
     def _module() -> Any:
@@ -268,12 +287,15 @@ class SimBackend:
         return pile_placeable(objects, seed, tc.scene, tc.physics, tc.robot)
 
     def run_isolated(self, obj: str, seed: int, planner: str) -> TrialResult:
+        self._register_plugins()
         return self._module().run_isolated_trial(obj, seed, planner, self._trial_config())
 
     def run_packed(self, objects: list[str], seed: int, planner: str) -> RoundResult:
+        self._register_plugins()
         return self._module().run_packed_round(objects, seed, planner, self._trial_config())
 
     def run_pile(self, objects: list[str], seed: int, planner: str) -> RoundResult:
+        self._register_plugins()
         return self._module().run_packed_round(
             objects, seed, planner, self._trial_config(), kind="pile"
         )

@@ -14,8 +14,11 @@ others complete normally, and the rest of the run goes on in a fresh pool.
 
 from __future__ import annotations
 
+import contextlib
+import importlib.machinery
 import multiprocessing
 import os
+import sys
 from collections.abc import Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
@@ -61,6 +64,23 @@ def _mp_context() -> multiprocessing.context.BaseContext:
     return ctx
 
 
+@contextlib.contextmanager
+def _main_not_reimported() -> Iterator[None]:
+    """While workers start, a script run as ``python script.py`` is not run again in each of
+    them (spawn and forkserver import the main module unless it has a name: a script without an
+    ``if __name__ == "__main__"`` guard would start a benchmark in every worker). The workers
+    need nothing from it: the backend and the plugin planners' specs travel with each trial."""
+    main = sys.modules.get("__main__")
+    if main is None or getattr(main, "__spec__", None) is not None:
+        yield  # `python -m module` (imported by name, guarded as a module), or an interpreter
+        return
+    main.__spec__ = importlib.machinery.ModuleSpec("__main__", None)
+    try:
+        yield
+    finally:
+        main.__spec__ = None
+
+
 def _stop_pool(pool: ProcessPoolExecutor, clean: bool) -> None:
     if clean:
         pool.shutdown(wait=True, cancel_futures=True)
@@ -93,9 +113,10 @@ class LocalExecutor:
         pool = ProcessPoolExecutor(max_workers=min(workers, len(specs)), mp_context=_mp_context())
         clean = False
         try:
-            futures: dict[Future[TrialRun], TrialSpec] = {
-                pool.submit(execute_trial, backend, s): s for s in specs
-            }
+            with _main_not_reimported():  # the workers start as trials are submitted
+                futures: dict[Future[TrialRun], TrialSpec] = {
+                    pool.submit(execute_trial, backend, s): s for s in specs
+                }
             lost: set[str] = set()
             for fut in as_completed(futures):
                 spec = futures[fut]

@@ -29,6 +29,7 @@ from hsqbench.experiment.results import (
     ResultStore,
 )
 from hsqbench.experiment.seeds import TrialSpec, build_trials
+from hsqbench.planner.registry import planner_sources
 from hsqbench.settings import code_version
 
 
@@ -146,6 +147,8 @@ def run_benchmark(
     chosen = config if base_seeds is None else _only_seeds(config, base_seeds)
     specs, unusable = _select(chosen, backend, executor, planners, experiments, progress)
     fingerprint = backend.fingerprint()
+    if plugged := planner_sources(config.planners):  # plugins' code is part of the run's identity
+        fingerprint = {**fingerprint, "planner_sources": plugged}
     chash = config_hash(RunIdentity(config, fingerprint))
     specs = list(specs)
     draws = {key: packed_draws(specs, kind) for kind, key in DRAW_KEYS.items()}

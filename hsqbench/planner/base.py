@@ -10,6 +10,7 @@ removed, and the timings (``cleaning`` first, ``total`` last).
 
 from __future__ import annotations
 
+import abc
 import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -23,11 +24,20 @@ from hsqbench.planner.cleaning import (
     all_removed_reason,
     clean_cloud,
 )
-from hsqbench.planner.hsq.stage_two.candidates import REJECTION_REASONS
-from hsqbench.planner.hsq.stage_two.elimination import RULE_DESCRIPTIONS
+from hsqbench.planner.gripper import resolve_gripper
+from hsqbench.planner.hsq.config import GraspConfig, resolve_config
+from hsqbench.planner.hsq.stage_two.candidates import (
+    REJECTION_REASONS,
+    CandidateSet,
+    ClosingLines,
+)
+from hsqbench.planner.hsq.stage_two.elimination import RULE_DESCRIPTIONS, eliminate
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from hsqbench.planner.api import PlanningContext, PlanResult
+    from hsqbench.planner.grasp import Grasp
 
 
 @dataclass(frozen=True)
@@ -91,22 +101,33 @@ def rules_removed_reason(counts: dict[str, int], prefix: str) -> str:
     return f"{prefix}{removed}; the last were removed by '{last}' ({RULE_DESCRIPTIONS[last]})"
 
 
-class PlannerBase:
-    """A cloud planner behind the :class:`~hsqbench.planner.api.Planner` protocol.
+class PlannerBase(abc.ABC):
+    """A cloud planner behind the :class:`~hsqbench.planner.api.Planner` protocol: the
+    contract a planner of your own subclasses (docs/your-own-planner.md).
 
-    Subclasses set ``name`` (or an instance attribute), :meth:`cleaning_config` and
-    :meth:`stages`; :meth:`plan` is the same for all.
+    Required: ``name`` (a class or instance attribute: the name in results) and
+    :meth:`stages` (abstract: a class without it cannot be built, and the error names it).
+    Opt-in: :meth:`cleaning_config` (default: hsq's cleaning) and :meth:`apply_rules` (the
+    harness's elimination rules on your grasps). :meth:`plan` is the same for all.
     """
 
     name: ClassVar[str] | str
 
     def cleaning_config(self) -> CleaningConfig:
-        """The cleaning every input cloud gets (the hsq planner's, for a fair comparison)."""
-        raise NotImplementedError
+        """The cleaning every input cloud gets: by default the hsq planner's (``cleaning:`` of
+        ``configs/planner.yaml``), for a fair comparison; override to clean otherwise."""
+        return resolve_config(None).cleaning
 
+    @abc.abstractmethod
     def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
-        """The planner's own stages on the cleaned cloud; their timings in the result."""
-        raise NotImplementedError
+        """The planner's own stages on the cleaned cloud: its grasps, best first, and the
+        timings of its stages."""
+
+    def apply_rules(
+        self, grasps: Sequence[Grasp], clean: CleanInput, context: PlanningContext
+    ) -> PlanResult:
+        """Opt in to the harness's elimination rules: :func:`apply_rules` on ``grasps``."""
+        return apply_rules(grasps, clean.points, context)
 
     def plan(self, points: ArrayLike, context: PlanningContext) -> PlanResult:
         """Validate and clean ``points``, run :meth:`stages`, and assemble the result."""
@@ -121,6 +142,62 @@ class PlannerBase:
         result.timings = {"cleaning": clean.seconds, **result.timings}
         result.timings["total"] = time.perf_counter() - start
         return result
+
+
+def apply_rules(
+    grasps: Sequence[Grasp],
+    points: NDArray[np.float64],
+    context: PlanningContext,
+    config: GraspConfig | None = None,
+) -> PlanResult:
+    """``grasps`` less those the harness's rules remove, best score first.
+
+    The rules hsq's candidates go through (duplicate, width, support, table, collision,
+    approach sweep: :mod:`~hsqbench.planner.hsq.stage_two.elimination`) with hsq's stage-two
+    settings (``config``, default ``grasp:`` of ``configs/planner.yaml``) and gripper, against
+    ``points`` (the cleaned cloud), with the context's table and cameras (a contact no camera
+    sees needs no support). ``contact-graspnet-elim`` is the same idea for the network's grasps.
+    """
+    from hsqbench.planner.api import PlanResult, validate_cameras, validate_plane
+
+    start = time.perf_counter()
+    cfg = config if config is not None else resolve_config(None).grasp
+    n = len(grasps)
+    if n == 0:
+        return PlanResult(grasps=[], reason="the planner proposed no grasp")
+    rotations = np.stack([g.rotation for g in grasps])
+    lines = ClosingLines(
+        centres=np.stack([g.position for g in grasps]),
+        directions=rotations[:, :, 0],
+        approach0=rotations[:, :, 2],
+        half_lengths=0.5 * np.array([g.width for g in grasps]),
+        source=np.full(n, -1, dtype=np.int64),
+        axis=np.full(n, -1, dtype=np.int64),
+        family=np.full(n, "own", dtype="<U12"),
+    )
+    cands = CandidateSet(lines, np.zeros(1))  # one roll: the grasp as given
+    report = eliminate(
+        cands,
+        points,
+        resolve_gripper(cfg.gripper),
+        cfg,
+        validate_plane(context.support_plane),
+        0 if context.seed is None else int(context.seed),
+        camera_positions=validate_cameras(context.camera_positions),
+    )
+    cands.scores = np.where(cands.kept, np.array([g.score for g in grasps]), np.nan)
+    ranked = cands.ranked()
+    counts = cands.counts_by_reason()
+    return PlanResult(
+        grasps=ranked,
+        candidates=cands,
+        remaining=report.remaining,
+        removed_by={r: counts[r] for r in REJECTION_REASONS},
+        timings={"elimination": time.perf_counter() - start},
+        reason=""
+        if ranked
+        else rules_removed_reason(counts, f"no grasp survived: of {n} grasps, the rules removed "),
+    )
 
 
 def context_of(**kwargs: Any) -> PlanningContext:

@@ -20,6 +20,7 @@ from hsqbench.planner.hsq.additions import AdditionsConfig, ablation_planners
 
 if TYPE_CHECKING:
     from hsqbench.planner.api import Planner
+    from hsqbench.planner.plugins import PlannerSource
 
 PlannerFactory = Callable[..., "Planner"]
 
@@ -109,6 +110,23 @@ _CONFIG_KEYS: dict[str, str] = {
 #: Planners that read simulator truth: their rows are a ceiling, not a method to compare with.
 PRIVILEGED = frozenset({"oracle"})
 
+#: One line on each built-in planner (``hsqbench planners``; the ablations are described from
+#: their addition's sentence).
+DESCRIPTIONS: dict[str, str] = {
+    "hsq": "the paper's method (hidden superquadrics) with our additions (configs/planner.yaml)",
+    "hsq-paper": "the paper's rules alone: hsq with every addition off",
+    "single-sq": "baseline: one superquadric per object, the approach the paper improves on",
+    "antipodal": "baseline: antipodal pairs of surface normals (GPD-style candidate sampler)",
+    "contact-graspnet": "learned baseline: Contact-GraspNet (Sundermeyer et al., ICRA 2021)",
+    "contact-graspnet-elim": "Contact-GraspNet's grasps through the harness's elimination rules",
+    "oracle": "privileged ceiling: plans on the true meshes, not the cloud",
+    "vgn": "learned baseline: VGN (Breyer et al., CoRL 2020) on a TSDF of the depth images",
+    "giga": "learned baseline: GIGA (Jiang et al., RSS 2021) on a TSDF of the depth images",
+}
+
+#: The planners of hsqbench itself (the others come from plugins: :mod:`.plugins`).
+_BUILTIN = frozenset(_FACTORIES)
+
 
 def unavailable(name: str) -> str | None:
     """Why planner ``name`` cannot run here (an optional extra is missing), or None.
@@ -166,22 +184,138 @@ def planner_config_key(name: str) -> str | None:
 
 
 def planner_names() -> list[str]:
-    """Registered planner names, sorted."""
-    return sorted(_FACTORIES)
+    """Planner names, sorted: built-in, registered, and installed (entry points of
+    ``hsqbench.planners``, not imported until used)."""
+    from hsqbench.planner.plugins import entry_points
+
+    return sorted(set(_FACTORIES) | set(entry_points()))
+
+
+def is_builtin(name: str) -> bool:
+    """Whether ``name`` is one of hsqbench's own planners."""
+    return name in _BUILTIN
 
 
 def get_planner(name: str, config: Any = None) -> Planner:
     """A new planner ``name`` built with ``config`` (None: that planner's defaults).
+
+    ``name`` may be a spec (``module:Name``, ``path/to/file.py:Name``): see
+    :func:`resolve_planner`.
 
     Raises:
         ValueError: unknown ``name``; the message lists the registered names.
         LearnedExtraMissing: (a RuntimeError) ``contact-graspnet*``, ``vgn`` or ``giga``
             without the ``learned`` extra; the message says how to install it.
     """
-    try:
-        factory = _FACTORIES[name]
-    except KeyError:
+    return _factory(resolve_planner(name))(config)
+
+
+def _factory(name: str) -> PlannerFactory:
+    """The factory of known planner ``name``, loading an installed one on first use."""
+    if name not in _FACTORIES:
+        from hsqbench.planner.plugins import load_entry_point
+
+        _FACTORIES[name] = load_entry_point(name)
+    return _FACTORIES[name]
+
+
+def resolve_planner(name_or_spec: str) -> str:
+    """The name of a planner given by name or by spec (``module:Name``, ``file.py:Name``,
+    registered here on first use: :mod:`hsqbench.planner.plugins`).
+
+    Raises:
+        ValueError: an unknown name (with the closest known one, and every choice), or a spec
+            that cannot be loaded (:class:`~hsqbench.planner.plugins.PluginError`).
+    """
+    from hsqbench.names import near
+    from hsqbench.planner.plugins import is_spec
+
+    if is_spec(name_or_spec):
+        return register_spec(name_or_spec)
+    names = planner_names()
+    if name_or_spec not in names:
         raise ValueError(
-            f"unknown planner {name!r}; choose one of: {', '.join(planner_names())}"
-        ) from None
-    return factory(config)
+            f"unknown planner {name_or_spec!r}{near(name_or_spec, names)}; choose one of: "
+            f"{', '.join(names)}, or give your own as module:Name or path/to/file.py:Name"
+        )
+    return name_or_spec
+
+
+def resolve_planners(items: Iterable[str]) -> list[str]:
+    """:func:`resolve_planner` of each item, duplicates dropped."""
+    return list(dict.fromkeys(resolve_planner(p) for p in items))
+
+
+# Planners registered here from specs (module:Name, file.py:Name): name -> where from.
+_SPECS: dict[str, PlannerSource] = {}
+
+
+def register_spec(spec: str) -> str:
+    """Register the planner of ``spec`` (once per process) and return its name.
+
+    Raises:
+        PluginError: the spec cannot be loaded, or its name is taken by another planner.
+    """
+    from hsqbench.planner.plugins import (
+        PluginError,
+        entry_points,
+        factory,
+        load_spec,
+        planner_name_of,
+    )
+
+    obj, source = load_spec(spec)
+    name = planner_name_of(obj, spec.rpartition(":")[2])
+    if name in _SPECS:
+        if _SPECS[name].spec != source.spec:
+            raise PluginError(
+                f"planner name {name!r} of {spec!r} is already taken by {_SPECS[name].spec}; "
+                "give one of them another name attribute"
+            )
+        return name
+    if is_builtin(name) or name in entry_points():
+        raise PluginError(
+            f"planner name {name!r} of {spec!r} is taken by a built-in or installed planner; "
+            "set another `name` on the class"
+        )
+    if bad := [c for c in "/,; " if c in name]:
+        raise PluginError(f"planner name {name!r} of {spec!r} must not contain {bad}")
+    register_planner(name, factory(obj, repr(spec)))
+    _SPECS[name] = source
+    return name
+
+
+def specs_of() -> tuple[tuple[str, str], ...]:
+    """``(name, spec)`` of the planners registered from specs in this process, for worker
+    processes to register them again (:func:`register_specs`)."""
+    return tuple((n, s.spec) for n, s in _SPECS.items())
+
+
+def register_specs(pairs: tuple[tuple[str, str], ...]) -> None:
+    """Register ``(name, spec)`` pairs from :func:`specs_of` (in a worker).
+
+    Raises:
+        PluginError: a spec now yields another name (its file changed under the run).
+    """
+    from hsqbench.planner.plugins import PluginError
+
+    for name, spec in pairs:
+        if name not in _SPECS and (got := register_spec(spec)) != name:
+            raise PluginError(f"planner spec {spec!r} now names {got!r}, not {name!r}")
+
+
+def source_of(name: str) -> PlannerSource | None:
+    """Where planner ``name``'s code comes from; None for a planner of hsqbench itself."""
+    from hsqbench.planner.plugins import entry_point_source, entry_points
+
+    if name in _SPECS:
+        return _SPECS[name]
+    if not is_builtin(name) and name in entry_points():
+        return entry_point_source(name)
+    return None
+
+
+def planner_sources(names: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """Where each plugin planner among ``names`` comes from (``{}`` when all are hsqbench's):
+    part of a run's identity, so a run's results name the code behind each planner."""
+    return {n: s.to_dict() for n in names if (s := source_of(n)) is not None}

@@ -1,0 +1,128 @@
+"""One CLI language: shared options mean and check the same everywhere, old spellings still
+work with a one-line note, misspelt names get the closest one, and every option has help."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+import hsqbench.planner.learned.network as network
+from hsqbench.cli import build_parser, main
+from hsqbench.commands import _options
+
+
+def _parsers(parser: argparse.ArgumentParser, path: str = "hsqbench"):
+    """Every parser of the command line (commands and their actions), with its path."""
+    yield path, parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from _parsers(sub, f"{path} {name}")
+
+
+def test_every_option_of_every_command_has_help():
+    missing = [
+        f"{path} {action.option_strings or action.dest}"
+        for path, parser in _parsers(build_parser())
+        for action in parser._actions
+        if action.help is None and not isinstance(action, argparse._SubParsersAction)
+    ]
+    assert missing == []
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["benchmark", "--jobs", "0"],
+        ["ablate", "--jobs", "-1"],
+        ["sweep", "depth_noise", "--jobs", "two"],
+        ["assets", "build", "--all", "--jobs", "0"],
+    ],
+)
+def test_jobs_is_checked_alike_when_the_command_line_is_read(argv, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        build_parser().parse_args(argv)
+    assert exit_.value.code == 2
+    assert "--jobs: " in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "dest", "value", "new"),
+    [
+        (["benchmark", "--config", "quick"], "protocol", "quick", "--protocol"),
+        (["ablate", "--config", "quick"], "protocol", "quick", "--protocol"),
+        (["trial", "--config", "trial_resting"], "trial_config", "trial_resting", "--trial-config"),
+        (["plan", "c.npy", "--config", "planner"], "planner_config", "planner", "--planner-config"),
+        (["scene", "--kind", "pile"], "scene", "pile", "--scene"),
+        (["assets", "--config", "x.yaml", "list"], "assets_config", "x.yaml", "--assets-config"),
+    ],
+)
+def test_old_spellings_work_with_one_line_saying_the_new_one(argv, dest, value, new, capsys):
+    args = build_parser().parse_args(argv)
+    assert getattr(args, dest) == value
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{argv[1 if argv[0] != 'plan' else 2]} is deprecated" in err[0]
+    assert f"use {new}" in err[0]
+
+
+def test_new_spellings_parse_silently(capsys):
+    args = build_parser().parse_args(["benchmark", "--protocol", "quick", "--jobs", "2"])
+    assert (args.protocol, args.jobs) == ("quick", 2)
+    assert build_parser().parse_args(["scene", "--scene", "isolated"]).scene == "isolated"
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["benchmark", "--protocol", "quik"], "no protocol 'quik' (did you mean 'quick'?)"),
+        (["benchmark", "--planners", "hqs"], "unknown planner 'hqs' (did you mean 'hsq'?)"),
+        (["trial", "--planner", "antipodel", "--object", "mug"], "(did you mean 'antipodal'?)"),
+        (["trial", "--object", "proc_cylindr"], "(did you mean 'proc_cylinder'?)"),
+        (["trial", "--planner", "nowhere.py:X", "--object", "mug"], "no file nowhere.py"),
+    ],
+)
+def test_misspelt_names_get_one_line_with_the_closest(argv, message, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+
+
+def test_a_benchmark_resumed_with_other_planners_says_which_to_give(tmp_path, capsys):
+    run = tmp_path / "r"
+    run.mkdir()
+    (run / "run.json").write_text('{"config": {"planners": ["hsq", "topdown"]}, "backend": {}}')
+    assert main(["benchmark", "--protocol", "quick", "--run", str(run), "--resume"]) == 2
+    assert "resume it with --planners hsq topdown" in capsys.readouterr().err
+
+
+def test_planners_lists_each_planner_on_one_line(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(network, "available", lambda: False)
+    spec = tmp_path / "mine.py"
+    spec.write_text(
+        "from hsqbench.planner.base import PlannerBase\n\nclass Mine(PlannerBase):\n"
+        "    name = 'mine-listed'\n\n    def stages(self, clean, context):\n        pass\n"
+    )
+    assert main(["planners", f"{spec}:Mine"]) == 0
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()}
+    assert "built-in" in lines["hsq"] and "privileged" in lines["oracle"]
+    assert (
+        "needs extra" in lines["contact-graspnet"] and "make learned" in lines["contact-graspnet"]
+    )
+    assert "plugged in" in lines["mine-listed"] and str(spec.resolve()) in lines["mine-listed"]
+
+
+def test_positive_int_accepts_whole_numbers_from_one():
+    assert _options.positive_int("3") == 3
+    for bad in ("0", "-2", "1.5"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            _options.positive_int(bad)
+
+
+def test_every_built_in_planner_has_its_line():
+    from hsqbench.planner.hsq.additions import ablation_planners
+    from hsqbench.planner.registry import DESCRIPTIONS, is_builtin, planner_names
+
+    builtin = {n for n in planner_names() if is_builtin(n)} - set(ablation_planners())
+    assert builtin <= set(DESCRIPTIONS), builtin - set(DESCRIPTIONS)
