@@ -420,10 +420,12 @@ class HSQPlanner(PlannerBase):
         if not groups:
             groups = [np.arange(cloud.shape[0])]
         recovery_s = 0.0
+        recoveries: list[Any] = []  # per group, made in the first draw; the draws share seed 0
         for draw in range(rcfg.no_grasp_redraws + 1):
             draw_context = dataclasses.replace(context, seed=redraw_seed(context.seed, draw))
             start = time.perf_counter()
-            hidden = self._recover(cloud, groups, clean, draw_context.seed)
+            recoveries = recoveries or self._recoveries(cloud, groups)
+            hidden = self._recover(recoveries, groups, clean, draw_context.seed)
             recovery_s += time.perf_counter() - start
             result = plan_in_context(cloud, hidden, self.config.grasp, self.gripper, draw_context)
             if result.grasps:
@@ -433,18 +435,21 @@ class HSQPlanner(PlannerBase):
         result.timings = {"recovery": recovery_s, **result.timings}
         return result
 
-    def _recover(
-        self, cloud: NDArray, groups: list[NDArray], clean: CleanInput, seed: int | None
-    ) -> list[Any]:
-        """Stage one on each group of ``cloud``; inliers index the caller's cloud."""
-        from hsqbench.planner.recovery import recover_hidden_superquadrics
+    def _recoveries(self, cloud: NDArray, groups: list[NDArray]) -> list[Any]:
+        """Stage one's draw-independent part (:class:`~.recovery.HiddenRecovery`) per group."""
+        from hsqbench.planner.recovery import HiddenRecovery
 
-        rcfg = self.config.recovery
+        return [HiddenRecovery(cloud[group], self.config.recovery) for group in groups]
+
+    def _recover(
+        self, recoveries: list[Any], groups: list[NDArray], clean: CleanInput, seed: int | None
+    ) -> list[Any]:
+        """Stage one's draw ``seed`` on each group; inliers index the caller's cloud."""
         # A loop over objects (at most a handful), each recovery vectorised over its points.
         hidden = [
             dataclasses.replace(h, inliers=group[h.inliers])
-            for group in groups
-            for h in recover_hidden_superquadrics(cloud[group], rcfg, seed=seed)
+            for group, recovery in zip(groups, recoveries, strict=True)
+            for h in recovery.draw(seed)
         ]
         return [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in hidden]
 
