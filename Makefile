@@ -89,7 +89,7 @@ benchmark: $(STAMP)
 	@rm -rf results/latest && cp -r results/$(RUN) results/latest && rm -f results/latest/.lock
 	@echo "tables: results/latest/tables.md (copied from results/$(RUN))"
 
-# The built-in robustness sweeps (configs/sweeps/) on the isolated protocol, paper and unseen
+# The built-in robustness sweeps (configs/protocols/sweeps/) on the isolated protocol, paper and unseen
 # objects, into results/sweeps/ (sweep.csv, one PNG per parameter, a run per point). With JOBS=2
 # on a 2-core machine the unseen objects' three seeds took 49 min for hsq and antipodal alone;
 # contact-graspnet, where installed, adds about 15 min per sweep on the paper's objects

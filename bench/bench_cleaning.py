@@ -1,7 +1,7 @@
 """Cloud cleaning (``hsqbench.planner.cleaning``) on the benchmark's clouds: what it removes, and
 its cost.
 
-For the 15 YCB objects x seeds, the isolated-scene clouds of ``bench/eval_planner_ycb.py`` (same
+For the 15 YCB objects x seeds, the isolated-scene clouds of ``bench/harness_clouds.py`` (same
 cache) with the ToF noise alone (``--sensor tof``: the calibration error shifts whole views by a
 few millimetres, which no local filter can tell from the surface) are compared with the object's
 true mesh. For each radius and neighbour count: the share of *far* points (more than 1 cm from
@@ -29,10 +29,10 @@ from scipy.spatial import cKDTree  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from eval_planner_ycb import observe  # noqa: E402
+from harness_clouds import observe  # noqa: E402
 
-from hsqbench.planner.api import resolve_config  # noqa: E402
 from hsqbench.planner.cleaning import CleaningConfig, isolated_mask  # noqa: E402
+from hsqbench.planner.hsq.config import resolve_config  # noqa: E402
 
 FAR_M = 0.01
 SURFACE_M = 0.004

@@ -35,9 +35,10 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from hsqbench.planner import plan_grasps  # noqa: E402
-from hsqbench.planner.api import plan_from_hidden, resolve_config  # noqa: E402
-from hsqbench.planner.recovery import recover_hidden_superquadrics  # noqa: E402
+from hsqbench.planner.hsq.config import resolve_config  # noqa: E402
+from hsqbench.planner.hsq.planner import plan_grasps  # noqa: E402
+from hsqbench.planner.hsq.stage_one.recovery import recover_hidden_superquadrics  # noqa: E402
+from hsqbench.planner.hsq.stage_two.plan import plan_from_hidden  # noqa: E402
 from hsqbench.settings import cache_dir, ycb_dir  # noqa: E402
 from tests.shapes import (  # noqa: E402
     cylinder_with_box_on_top,
@@ -83,8 +84,8 @@ def clouds(n: int, rng: np.random.Generator) -> dict[str, tuple[np.ndarray, dict
         out[name] = (seen(cloud.points, cloud.normals, n, rng), kwargs)
     if ycb_dir(required=False) is not None:
         # The harness's own two-camera clouds (sensor model of configs/perception.yaml, table
-        # plane and camera centres included), rendered once and cached by eval_planner_ycb.
-        from eval_planner_ycb import observe
+        # plane and camera centres included), rendered once and cached by harness_clouds.
+        from harness_clouds import observe
 
         for name in YCB_OBJECTS:
             obs = observe(name, 0, None, refresh=False)

@@ -2,7 +2,7 @@
 
 The clouds are those of the benchmark's isolated attempts: each object of HSQ_YCB_DIR in its
 resting poses (``configs/scene_resting.yaml``) seen by the two depth cameras with the configured
-sensor model, rendered once and cached by ``bench/eval_planner_ycb.py``. Each is planned
+sensor model, rendered once and cached by ``bench/harness_clouds.py``. Each is planned
 ``--repeats`` times through the registered planner (as the trial runner calls it: table plane,
 camera centres, seed) with BLAS, OpenMP and K-means on one thread; the CPU time of a cloud is
 the median of its repeats. Printed: the median and 90th percentile over the paper's 15 and over
@@ -35,7 +35,7 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from eval_planner_ycb import object_names, observe  # noqa: E402
+from harness_clouds import object_names, observe  # noqa: E402
 
 from hsqbench.experiment.machine import cpu_model  # noqa: E402
 from hsqbench.planner.api import PlanningContext  # noqa: E402

@@ -33,9 +33,9 @@ from threadpoolctl import threadpool_limits  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hsqbench.planner import recovery  # noqa: E402
-from hsqbench.planner.config import load_planner_config  # noqa: E402
 from hsqbench.planner.downsample import voxel_downsample  # noqa: E402
+from hsqbench.planner.hsq.config import load_planner_config  # noqa: E402
+from hsqbench.planner.hsq.stage_one import recovery  # noqa: E402
 from hsqbench.settings import ycb_dir  # noqa: E402
 from tests.shapes import (  # noqa: E402
     cylinder_with_box_on_top,

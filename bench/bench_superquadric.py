@@ -17,7 +17,8 @@ from functools import partial
 import numpy as np
 from scipy.spatial import cKDTree
 
-from hsqbench.superquadric import Superquadric, alpha_beta
+from hsqbench.superquadric.fit import alpha_beta
+from hsqbench.superquadric.geometry import Superquadric
 
 SHAPES = {
     "box": (0.1, 0.1, (0.4, 0.6, 1.0)),

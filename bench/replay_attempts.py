@@ -10,6 +10,10 @@ trial config (``run.json``), and prints old -> new per attempt and a transition 
 of unchanged code gives the recorded outcome (same seed, same trial). ``--set`` replays under
 changed trial-config values (``load_trial_config``'s overrides, YAML-parsed). One process; pair
 it with ``--sample`` of the successes to check that a fix breaks none.
+
+This script plans again (a change of the planner or perception shows). To re-execute the grasps
+a run recorded, without planning (a change of the execution, or a look at one attempt with
+``--rerun``), use ``hsqbench replay RUN``.
 """
 
 from __future__ import annotations

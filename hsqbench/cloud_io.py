@@ -86,9 +86,30 @@ def _read_ply(path: Path) -> NDArray:
     if not data.startswith(b"ply"):
         raise CloudFormatError(f"{path}: not a PLY file (it must start with 'ply')")
     lines, body = _read_header(data, b"end_header", path, "PLY")
+    fmt, elements = _ply_header(path, lines[1:])
+    vertex = next((i for i, e in enumerate(elements) if e["name"] == "vertex"), None)
+    if vertex is None:
+        raise CloudFormatError(f"{path}: the PLY file has no 'vertex' element")
+    props = elements[vertex]["props"]
+    names = [name for name, _ in props]
+    missing = [axis for axis in "xyz" if axis not in names]
+    if missing:
+        raise CloudFormatError(f"{path}: the PLY vertices lack the properties {missing}")
+    if any(t is None for _, t in props):
+        raise CloudFormatError(f"{path}: PLY vertices with list properties are not supported")
+    if fmt == "ascii":
+        return _ply_ascii(path, data[body:], elements, vertex)
+    return _ply_binary(
+        path, data, body, elements, vertex, "<" if fmt == "binary_little_endian" else ">"
+    )
+
+
+def _ply_header(path: Path, lines: list[str]) -> tuple[str, list[dict]]:
+    """The PLY format and its elements in file order, each ``{"name", "count", "props"}`` with
+    props ``(name, numpy type)`` (type None: a list property)."""
     fmt = None
     elements: list[dict] = []
-    for line in lines[1:]:
+    for line in lines:
         words = line.split()
         if not words or words[0] in ("comment", "obj_info"):
             continue
@@ -107,34 +128,32 @@ def _read_ply(path: Path) -> NDArray:
             raise CloudFormatError(f"{path}: unexpected PLY header line {line!r}")
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise CloudFormatError(f"{path}: unsupported PLY format {fmt!r}")
-    vertex = next((i for i, e in enumerate(elements) if e["name"] == "vertex"), None)
-    if vertex is None:
-        raise CloudFormatError(f"{path}: the PLY file has no 'vertex' element")
-    props = elements[vertex]["props"]
+    return fmt, elements
+
+
+def _ply_ascii(path: Path, body: bytes, elements: list[dict], vertex: int) -> NDArray:
+    props, count = elements[vertex]["props"], elements[vertex]["count"]
     names = [name for name, _ in props]
-    missing = [axis for axis in "xyz" if axis not in names]
-    if missing:
-        raise CloudFormatError(f"{path}: the PLY vertices lack the properties {missing}")
-    if any(t is None for _, t in props):
-        raise CloudFormatError(f"{path}: PLY vertices with list properties are not supported")
-    count = elements[vertex]["count"]
-    if fmt == "ascii":
-        rows = data[body:].decode("ascii", errors="replace").splitlines()
-        start = sum(e["count"] for e in elements[:vertex])
-        block = rows[start : start + count]
-        if len(block) < count:
-            raise CloudFormatError(
-                f"{path}: the PLY file promises {count} vertices but has {len(block)}"
-            )
-        try:
-            values = np.array([row.split()[: len(props)] for row in block], dtype=np.float64)
-        except ValueError as exc:
-            raise CloudFormatError(f"{path}: bad PLY vertex line: {exc}") from None
-        values = values.reshape(-1, len(props)) if count == 0 else values
-        if values.shape != (count, len(props)):
-            raise CloudFormatError(f"{path}: PLY vertex lines must have {len(props)} values")
-        return values[:, [names.index(axis) for axis in "xyz"]]
-    order = "<" if fmt == "binary_little_endian" else ">"
+    rows = body.decode("ascii", errors="replace").splitlines()
+    start = sum(e["count"] for e in elements[:vertex])
+    block = rows[start : start + count]
+    if len(block) < count:
+        raise CloudFormatError(
+            f"{path}: the PLY file promises {count} vertices but has {len(block)}"
+        )
+    try:
+        values = np.array([row.split()[: len(props)] for row in block], dtype=np.float64)
+    except ValueError as exc:
+        raise CloudFormatError(f"{path}: bad PLY vertex line: {exc}") from None
+    values = values.reshape(-1, len(props)) if count == 0 else values
+    if values.shape != (count, len(props)):
+        raise CloudFormatError(f"{path}: PLY vertex lines must have {len(props)} values")
+    return values[:, [names.index(axis) for axis in "xyz"]]
+
+
+def _ply_binary(
+    path: Path, data: bytes, body: int, elements: list[dict], vertex: int, order: str
+) -> NDArray:
     offset = body
     for element in elements[:vertex]:
         if any(t is None for _, t in element["props"]):
@@ -145,7 +164,8 @@ def _read_ply(path: Path) -> NDArray:
         offset += (
             element["count"] * np.dtype([(n, order + t) for n, t in element["props"]]).itemsize
         )
-    dtype = np.dtype([(n, order + t) for n, t in props])
+    count = elements[vertex]["count"]
+    dtype = np.dtype([(n, order + t) for n, t in elements[vertex]["props"]])
     if len(data) < offset + count * dtype.itemsize:
         raise CloudFormatError(
             f"{path}: the PLY file is truncated ({count} vertices of {dtype.itemsize} bytes "
@@ -158,6 +178,21 @@ def _read_ply(path: Path) -> NDArray:
 # ----------------------------------------------------------------------------- PCD
 def _read_pcd(path: Path) -> NDArray:
     data = path.read_bytes()
+    fields, mode, start = _pcd_header(path, data)
+    names, counts, total = _pcd_layout(path, fields)
+    if mode == "ascii":
+        return _pcd_ascii(path, data[start:], names, counts, total)
+    if mode == "binary":
+        return _pcd_binary(path, data, start, fields, names, counts, total)
+    raise CloudFormatError(
+        f"{path}: PCD 'DATA {mode}' is not supported; save it as 'ascii' or 'binary' "
+        "(e.g. Open3D: o3d.io.write_point_cloud(path, pcd, compressed=False))"
+    )
+
+
+def _pcd_header(path: Path, data: bytes) -> tuple[dict[str, list[str]], str, int]:
+    """The PCD header's lines by keyword (``FIELDS`` -> its words), the ``DATA`` mode and the
+    offset where the points start."""
     match = re.search(rb"^DATA[ \t]+(\S+)[^\n]*\n", data, flags=re.MULTILINE)
     if match is None:
         raise CloudFormatError(f"{path}: not a PCD file (no 'DATA' line)")
@@ -165,20 +200,23 @@ def _read_pcd(path: Path) -> NDArray:
         header = data[: match.start()].decode("ascii")
     except UnicodeDecodeError:
         raise CloudFormatError(f"{path}: the PCD header is not ASCII text") from None
-    mode = match.group(1).decode("ascii", errors="replace")
     fields: dict[str, list[str]] = {}
     for line in header.splitlines():
         words = line.split()
         if words and not words[0].startswith("#"):
             fields[words[0].upper()] = words[1:]
+    return fields, match.group(1).decode("ascii", errors="replace"), match.end()
+
+
+def _pcd_layout(path: Path, fields: dict[str, list[str]]) -> tuple[list[str], list[int], int]:
+    """The field names (x, y and z among them), each field's value count, and the point count."""
     names = fields.get("FIELDS")
     if not names:
         raise CloudFormatError(f"{path}: the PCD header has no FIELDS line")
     missing = [axis for axis in "xyz" if axis not in names]
     if missing:
         raise CloudFormatError(f"{path}: the PCD fields {names} lack {missing}")
-    n = len(names)
-    counts = [int(c) for c in fields.get("COUNT", ["1"] * n)]
+    counts = [int(c) for c in fields.get("COUNT", ["1"] * len(names))]
     try:
         points_line = fields.get("POINTS")
         if points_line:
@@ -187,42 +225,51 @@ def _read_pcd(path: Path) -> NDArray:
             total = int(fields["WIDTH"][0]) * int(fields.get("HEIGHT", ["1"])[0])
     except (KeyError, ValueError, IndexError):
         raise CloudFormatError(f"{path}: the PCD header gives no point count") from None
+    return names, counts, total
+
+
+def _pcd_ascii(path: Path, body: bytes, names: list[str], counts: list[int], total: int) -> NDArray:
     columns = np.cumsum([0, *counts])
+    rows = body.decode("ascii", errors="replace").split("\n")
+    rows = [r for r in rows if r.strip()][:total]
+    try:
+        values = np.array([r.split() for r in rows], dtype=np.float64)
+    except ValueError as exc:
+        raise CloudFormatError(f"{path}: bad PCD data line: {exc}") from None
+    if values.ndim != 2 or values.shape != (total, int(columns[-1])):
+        raise CloudFormatError(
+            f"{path}: the PCD header promises {total} points of {int(columns[-1])} values"
+        )
     index = {name: int(columns[i]) for i, name in enumerate(names)}
-    if mode == "ascii":
-        rows = data[match.end() :].decode("ascii", errors="replace").split("\n")
-        rows = [r for r in rows if r.strip()][:total]
-        try:
-            values = np.array([r.split() for r in rows], dtype=np.float64)
-        except ValueError as exc:
-            raise CloudFormatError(f"{path}: bad PCD data line: {exc}") from None
-        if values.ndim != 2 or values.shape != (total, int(columns[-1])):
-            raise CloudFormatError(
-                f"{path}: the PCD header promises {total} points of {int(columns[-1])} values"
-            )
-        return values[:, [index[axis] for axis in "xyz"]]
-    if mode == "binary":
-        sizes = [int(s) for s in fields.get("SIZE", [])]
-        types = fields.get("TYPE", [])
-        if len(sizes) != n or len(types) != n:
-            raise CloudFormatError(f"{path}: the PCD header needs SIZE and TYPE for each field")
-        try:
-            dtype = np.dtype(
-                [
-                    (name, "<" + _PCD_TYPES[(t.upper(), s)], (c,))
-                    for name, s, t, c in zip(names, sizes, types, counts, strict=True)
-                ]
-            )
-        except KeyError as exc:
-            raise CloudFormatError(f"{path}: unsupported PCD field type {exc}") from None
-        if len(data) < match.end() + total * dtype.itemsize:
-            raise CloudFormatError(f"{path}: the PCD file is truncated ({total} points promised)")
-        rec = np.frombuffer(data, dtype=dtype, count=total, offset=match.end())
-        return np.column_stack([rec[axis][:, 0].astype(np.float64) for axis in "xyz"])
-    raise CloudFormatError(
-        f"{path}: PCD 'DATA {mode}' is not supported; save it as 'ascii' or 'binary' "
-        "(e.g. Open3D: o3d.io.write_point_cloud(path, pcd, compressed=False))"
-    )
+    return values[:, [index[axis] for axis in "xyz"]]
+
+
+def _pcd_binary(
+    path: Path,
+    data: bytes,
+    start: int,
+    fields: dict[str, list[str]],
+    names: list[str],
+    counts: list[int],
+    total: int,
+) -> NDArray:
+    sizes = [int(s) for s in fields.get("SIZE", [])]
+    types = fields.get("TYPE", [])
+    if len(sizes) != len(names) or len(types) != len(names):
+        raise CloudFormatError(f"{path}: the PCD header needs SIZE and TYPE for each field")
+    try:
+        dtype = np.dtype(
+            [
+                (name, "<" + _PCD_TYPES[(t.upper(), s)], (c,))
+                for name, s, t, c in zip(names, sizes, types, counts, strict=True)
+            ]
+        )
+    except KeyError as exc:
+        raise CloudFormatError(f"{path}: unsupported PCD field type {exc}") from None
+    if len(data) < start + total * dtype.itemsize:
+        raise CloudFormatError(f"{path}: the PCD file is truncated ({total} points promised)")
+    rec = np.frombuffer(data, dtype=dtype, count=total, offset=start)
+    return np.column_stack([rec[axis][:, 0].astype(np.float64) for axis in "xyz"])
 
 
 # ----------------------------------------------------------------------------- NPY, XYZ

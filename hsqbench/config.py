@@ -8,34 +8,47 @@ typo in a config never passes silently.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import types
 import typing
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
 
-from hsqbench.settings import CONFIG_DIR
+from hsqbench.errors import ConfigError
+from hsqbench.overrides import apply_overrides
+from hsqbench.settings import CONFIG_DIR, PROTOCOL_DIR
 
 T = TypeVar("T")
 
 
-class ConfigError(ValueError):
-    """A configuration file or mapping does not match its dataclass."""
+#: Where a bare config name is looked up: the component configs (``planner``, ``trial``), then
+#: the protocols (``paper``, ``quick``). No name is in both (tests/test_config_defaults.py).
+SEARCH_DIRS = (CONFIG_DIR, PROTOCOL_DIR)
 
 
 def resolve_config_path(name_or_path: str | Path) -> Path:
-    """``"planner"`` -> ``configs/planner.yaml``; an existing path is returned as is."""
+    """``"planner"`` -> ``configs/planner.yaml``, ``"paper"`` -> ``configs/protocols/paper.yaml``;
+    an existing YAML path is returned as is."""
     path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml") and path.exists():
-        return path
-    candidate = CONFIG_DIR / f"{name_or_path}.yaml"
-    if candidate.exists():
-        return candidate
-    known = sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
-    raise ConfigError(f"no config {name_or_path!r}: not a YAML file, and not one of {known}")
+    if path.suffix in (".yaml", ".yml"):
+        if path.exists():
+            return path
+        raise ConfigError(f"no config file {str(path)!r} (looked from {Path.cwd()})")
+    for folder in SEARCH_DIRS:
+        candidate = folder / f"{name_or_path}.yaml"
+        if candidate.exists():
+            return candidate
+    protocols = sorted(p.stem for p in PROTOCOL_DIR.glob("*.yaml"))
+    components = sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
+    raise ConfigError(
+        f"no config {str(name_or_path)!r}: not a YAML file; protocols: {protocols}, "
+        f"component configs: {components}"
+    )
 
 
 def _coerce(value: Any, tp: Any, where: str) -> Any:
@@ -151,7 +164,16 @@ def load_config_data(name_or_path: str | Path, _chain: tuple[Path, ...] = ()) ->
         return data
     if not isinstance(base, str):
         raise ConfigError(f"{path}: '{EXTENDS}' must name one config, got {base!r}")
-    return _merge(load_config_data(base, (*_chain, path.resolve())), data)
+    return _merge(load_config_data(_beside(base, path), (*_chain, path.resolve())), data)
+
+
+def _beside(base: str, path: Path) -> str | Path:
+    """The file ``extends:`` names: a relative YAML path is read next to the file that names it
+    (a variant works from any folder); a bare name is a config of ``configs/``."""
+    ref = Path(base)
+    if ref.suffix in (".yaml", ".yml") and not ref.is_absolute():
+        return path.parent / ref
+    return base
 
 
 def _config_class(tp: Any) -> Any:
@@ -188,8 +210,6 @@ def load_tree(cls: type[T], name_or_path: str | Path, overrides: dict[str, Any] 
     it names expanded into it (:func:`expand_names`), ``overrides`` applied to that mapping
     (:func:`hsqbench.overrides.apply_overrides`: every path checked against the dataclasses),
     then the dataclasses built, each validating its own values."""
-    from hsqbench.overrides import apply_overrides
-
     path = resolve_config_path(name_or_path)
     data = expand_names(cls, load_config_data(path), path.name)
     if overrides:
@@ -217,3 +237,15 @@ def config_hash(config: Any) -> str:
     """A short, stable hash of a config's values, stored with every result row."""
     blob = json.dumps(to_dict(config), sort_keys=True).encode()
     return hashlib.sha256(blob).hexdigest()[:12]
+
+
+def load_cached(loader: Callable[[str], T], name_or_path: str | Path) -> T:
+    """``loader`` of the config ``name_or_path`` (a name in ``configs/`` or a YAML path), parsed
+    once per modification time of the file (planning many clouds re-reads nothing)."""
+    path = resolve_config_path(name_or_path)
+    return _load_cached(loader, str(path), path.stat().st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=32)
+def _load_cached(loader: Any, path: str, mtime_ns: int) -> Any:
+    return loader(path)

@@ -27,7 +27,7 @@ import typing
 from collections.abc import Mapping
 from typing import Any
 
-from hsqbench.config import ConfigError
+from hsqbench.errors import ConfigError
 
 
 def _plain(value: Any) -> Any:

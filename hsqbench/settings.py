@@ -8,6 +8,9 @@ Settings (environment variables):
   ``HSQ_YCB_DIR``, the YCB objects a command needs are downloaded into its ``ycb/`` folder.
 - ``HSQ_YCB_URL``: a mirror of the YCB archives (default: ``download.base_url`` of
   ``configs/assets.yaml``, the official source).
+- ``HSQ_MODELS_DIR``: your own folder of pretrained network weights (``giga/vgn_packed.pt``,
+  ...; the ``vgn`` and ``giga`` planners); hsqbench reads it and never writes to it. Without it,
+  missing weights are downloaded into the data folder's ``models/``.
 - ``MENAGERIE_ROOT``: a local MuJoCo Menagerie checkout; read by the ``mujoco_menagerie`` package.
 - ``HSQ_CACHE_DIR``: where built object assets go (default ``<repo>/assets/build``).
 - ``MUJOCO_GL``: ``egl`` for offscreen rendering on machines without a display.
@@ -22,6 +25,10 @@ from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 CONFIG_DIR = REPO_ROOT / "configs"
+#: The benchmark protocols users run (``--config paper``), apart from the component configs.
+PROTOCOL_DIR = CONFIG_DIR / "protocols"
+#: The built-in robustness sweeps (``hsqbench sweep depth_noise``).
+SWEEP_DIR = PROTOCOL_DIR / "sweeps"
 SCENES_DIR = REPO_ROOT / "scenes"
 RESULTS_DIR = REPO_ROOT / "results"
 
@@ -89,6 +96,30 @@ def ycb_dir(required: bool = True) -> Path | None:
         "fetches them now; or `export HSQ_YCB_DIR=DIR` for your own YCB folder laid out as "
         "<name>/textured.obj with objects.csv."
     )
+
+
+def models_dir_is_set() -> bool:
+    """Whether the user points hsqbench at their own folder of network weights."""
+    return bool(os.environ.get("HSQ_MODELS_DIR"))
+
+
+def models_dir() -> Path:
+    """Where pretrained network weights are read: ``HSQ_MODELS_DIR``, else the data folder's
+    ``models/`` (where missing weights are downloaded).
+
+    Raises:
+        SettingError: ``HSQ_MODELS_DIR`` is set but is not a folder.
+    """
+    value = os.environ.get("HSQ_MODELS_DIR")
+    if not value:
+        return data_dir() / "models"
+    if not Path(value).is_dir():
+        raise SettingError(
+            f"HSQ_MODELS_DIR={value} is not a folder: point it at a folder holding giga/*.pt "
+            "(see docs/learned-baselines.md), or unset it to download the weights into the "
+            "data folder"
+        )
+    return Path(value).resolve()
 
 
 def cache_dir() -> Path:

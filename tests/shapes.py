@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from hsqbench.superquadric import Superquadric
+from hsqbench.superquadric.geometry import Superquadric
 
 Array = NDArray[np.float64]
 

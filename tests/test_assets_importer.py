@@ -56,9 +56,34 @@ def test_register_scale_up_and_density_reach_the_built_object(meshes, cache):
 
 def test_names_taken_by_built_in_objects_need_a_prefix(meshes, cache, tmp_path):
     with pytest.raises(ValueError, match=r"\['block_1'\] are taken.*--prefix"):
-        register(meshes, cache, reserved={"block_1"}, density_kg_m3=500.0)
-    specs = register(meshes, cache, reserved={"block_1"}, density_kg_m3=500.0, prefix="my_")
+        register(meshes, cache, reserved={"block_1"}, density_kg_m3=500.0, scale=0.001)
+    specs = register(
+        meshes, cache, reserved={"block_1"}, density_kg_m3=500.0, scale=0.001, prefix="my_"
+    )
     assert {s.name for s in specs} == {"my_block_1", "my_tall_can"}
+
+
+def test_a_mesh_in_millimetres_is_refused_with_the_scale_that_fixes_it(meshes, cache, capsys):
+    with pytest.raises(ValueError) as err:
+        register(meshes, cache, reserved=set(), density_kg_m3=500.0)
+    assert str(err.value) == (
+        "Block-1.stl is 80 m across at --scale 1, over the 1 m a graspable object can span: "
+        "looks like millimetres: pass --scale 0.001"
+    )
+    assert not (cache / "imported").exists()  # nothing registered
+    # Scaled twice (metres given --scale 0.001): 0.08 mm, refused with the other fix.
+    metres = meshes.parent / "metres"
+    metres.mkdir()
+    trimesh.creation.box(extents=(0.04, 0.06, 0.08)).export(metres / "block.stl")
+    with pytest.raises(ValueError, match=r"under the 5 mm .*: looks like metres: pass --scale 1$"):
+        register(metres, cache, reserved=set(), density_kg_m3=500.0, scale=0.001)
+    # The CLI says it in one line, exit status 2.
+    assert main(["assets", "import", str(meshes), "--no-build"]) == 2
+    err_lines = capsys.readouterr().err.strip().splitlines()
+    assert err_lines == [
+        "hsqbench assets: error: Block-1.stl is 80 m across at --scale 1, over the 1 m a "
+        "graspable object can span: looks like millimetres: pass --scale 0.001"
+    ]
 
 
 def test_two_files_with_one_name_are_refused(tmp_path, cache):

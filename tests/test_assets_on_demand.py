@@ -73,3 +73,24 @@ def test_no_ycb_folder_message_names_every_way_and_no_machine_path(monkeypatch):
     for way in ("hsqbench benchmark", "hsqbench assets download", "export HSQ_YCB_DIR=DIR"):
         assert way in message
     assert "shared" not in message and "/work" not in message
+
+
+def test_trial_downloads_a_missing_ycb_object_as_benchmark_does(server, monkeypatch, capsys):
+    import hsqbench.sim.trial as trial
+    from hsqbench.cli import main
+    from hsqbench.sim.outcome import Attempt, Outcome, TrialResult
+
+    server.files.update(archives("foam_brick"))
+    ran = []
+
+    def fake_trial(obj, seed, planner, config, recorder=None):
+        ran.append(obj)
+        return TrialResult(obj, seed, planner, [Attempt(Outcome.NO_GRASP_FOUND)])
+
+    monkeypatch.setattr(trial, "run_isolated_trial", fake_trial)
+    assert main(["trial", "--object", "foam_brick", "--sensor", "surface"]) == 0
+    assert ran == ["foam_brick"]
+    line = capsys.readouterr().err.splitlines()[0]  # then the download's progress
+    assert line.startswith("HSQ_YCB_DIR is not set: downloading 1 YCB object(s) into ")
+    assert line.endswith("(CC BY 4.0, see its ATTRIBUTION.md): foam_brick")
+    assert (default_ycb_dir() / "foam_brick" / "textured.obj").is_file()

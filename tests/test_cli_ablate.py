@@ -8,8 +8,8 @@ import pytest
 
 from hsqbench.cli import main
 from hsqbench.commands.ablate import ablation_planner_list
-from hsqbench.planner.additions import ADDITIONS, AdditionsConfig
-from hsqbench.planner.config import load_planner_config
+from hsqbench.planner.hsq.additions import ADDITIONS, AdditionsConfig
+from hsqbench.planner.hsq.config import load_planner_config
 from hsqbench.planner.registry import planner_names
 
 
@@ -36,7 +36,7 @@ def test_the_list_is_hsq_the_paper_and_one_planner_per_addition(capsys) -> None:
 
 def test_an_addition_off_by_default_is_not_ablated(monkeypatch) -> None:
     """hsq-no-<name> of a switch the default config has off would be hsq itself."""
-    import hsqbench.planner.config as planner_config
+    import hsqbench.planner.hsq.config as planner_config
 
     loaded = load_planner_config()
     off = replace(loaded, additions=replace(loaded.additions, sweep=False))
@@ -47,7 +47,7 @@ def test_an_addition_off_by_default_is_not_ablated(monkeypatch) -> None:
 
 
 def test_a_superseded_addition_is_ablated_when_its_successor_is_off(monkeypatch) -> None:
-    import hsqbench.planner.config as planner_config
+    import hsqbench.planner.hsq.config as planner_config
 
     loaded = load_planner_config()
     off = replace(loaded, additions=replace(loaded.additions, hidden_bodies=False))

@@ -88,15 +88,56 @@ def test_missing_viewer_says_so(small_rrd, monkeypatch, capsys):
     assert "not installed" in out and "pip install rerun-sdk==" in out
 
 
-def test_web_serves_with_the_rerun_executable(small_rrd, monkeypatch, capsys):
-    monkeypatch.setattr(view, "viewer_executable", lambda: "/opt/bin/rerun")
-    calls = []
-    monkeypatch.setattr(view.subprocess, "call", lambda args: calls.append(args) or 0)
-    assert main(["view", str(small_rrd), "--web", "--port", "9191"]) == 0
-    assert calls == [
-        ["/opt/bin/rerun", "--web-viewer", "--web-viewer-port", "9191", str(small_rrd)]
+def test_web_prints_the_address_that_opens_the_episode(small_rrd, monkeypatch, capsys):
+    """The printed address is the viewer's page with the recording and its layout as url=
+    parameters; both are served, byte for byte, while the command waits (no CPU: it blocks)."""
+    import urllib.request
+    from urllib.parse import parse_qs, urlsplit
+
+    served = {}
+
+    def fetch_while_serving():
+        out = capsys.readouterr().out
+        address = next(line[5:] for line in out.splitlines() if line.startswith("open "))
+        served["address"] = address
+        for url in parse_qs(urlsplit(address).query)["url"]:
+            with urllib.request.urlopen(url, timeout=10) as response:
+                served[url.rsplit("/", 1)[1]] = (
+                    response.read(),
+                    response.headers["Access-Control-Allow-Origin"],
+                )
+        with urllib.request.urlopen(address, timeout=10) as page:
+            served["page"] = page.read()
+
+    monkeypatch.setattr(view, "_wait", fetch_while_serving)
+    assert main(["view", str(small_rrd), "--web", "--web-port", "0", "--rrd-port", "0"]) == 0
+    parts = urlsplit(served["address"])
+    assert parts.scheme == "http" and parts.hostname == "localhost" and parts.path == "/"
+    urls = parse_qs(parts.query)["url"]
+    rrd_port = urlsplit(urls[0]).port
+    assert urls == [
+        f"http://localhost:{rrd_port}/episode.rrd",
+        f"http://localhost:{rrd_port}/episode.rbl",
     ]
-    assert main(["view", str(small_rrd), "--web", "--port", "0"]) == 2
+    assert served["episode.rrd"] == (small_rrd.read_bytes(), "*")
+    assert served["episode.rbl"][0][:4] == small_rrd.read_bytes()[:4]  # an rrd-format file
+    assert b"Rerun" in served["page"] and parts.port != rrd_port
+    out = capsys.readouterr().out  # each file sent is said (a remote user sees the tunnel works)
+    assert "sent episode.rrd to the browser at 127.0.0.1" in out and "sent episode.rbl" in out
+
+
+def test_web_ports_are_checked(small_rrd, capsys):
+    assert main(["view", str(small_rrd), "--web", "--web-port", "70000"]) == 2
+    assert "--web-port must be a TCP port 0-65535" in capsys.readouterr().err
+    assert main(["view", str(small_rrd), "--web", "--web-port", "9999", "--rrd-port", "9999"]) == 2
+    assert "give two ports" in capsys.readouterr().err
+
+
+def test_the_old_port_option_still_works_with_a_note(small_rrd, monkeypatch, capsys):
+    monkeypatch.setattr(view, "_serve_web", lambda summary, web, rrd: print(f"ports {web} {rrd}"))
+    assert main(["view", str(small_rrd), "--web", "--port", "9191"]) == 0
+    out = capsys.readouterr().out
+    assert "--port is now --web-port" in out and f"ports 9191 {view.RRD_PORT}" in out
 
 
 def test_has_display():

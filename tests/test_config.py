@@ -6,7 +6,8 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from hsqbench.config import ConfigError, config_hash, from_dict, load_config
+from hsqbench.config import config_hash, from_dict, load_config
+from hsqbench.errors import ConfigError
 
 
 @dataclass(frozen=True)
@@ -50,8 +51,37 @@ def test_hash_changes_with_values() -> None:
 
 
 def test_unknown_config_name_lists_choices() -> None:
-    with pytest.raises(ConfigError, match="not one of"):
+    with pytest.raises(
+        ConfigError, match=r"protocols: \[.*'paper'.*component configs: \[.*'trial'"
+    ):
         load_config(Outer, "no-such-config")
+    with pytest.raises(ConfigError, match=r"no config file 'nowhere/x\.yaml'"):
+        load_config(Outer, "nowhere/x.yaml")
+
+
+def test_a_bare_name_is_a_component_config_or_a_protocol() -> None:
+    from hsqbench.config import resolve_config_path
+    from hsqbench.settings import CONFIG_DIR, PROTOCOL_DIR
+
+    assert resolve_config_path("trial") == CONFIG_DIR / "trial.yaml"
+    assert resolve_config_path("paper") == PROTOCOL_DIR / "paper.yaml"
+    assert resolve_config_path("protocols/sweeps/cameras") == PROTOCOL_DIR / "sweeps/cameras.yaml"
+    # A protocol named like a component config would shadow nothing silently: none is.
+    components = {p.stem for p in CONFIG_DIR.glob("*.yaml")}
+    assert components and not components & {p.stem for p in PROTOCOL_DIR.glob("*.yaml")}
+
+
+def test_a_relative_extends_is_read_beside_the_variant_from_any_folder(tmp_path, monkeypatch):
+    """A variant in the user's folder extends a file next to it, whatever the working folder."""
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "base.yaml").write_text("iterations: 7\n")
+    (tmp_path / "mine" / "variant.yaml").write_text("extends: base.yaml\nenabled: false\n")
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    assert load_config(Outer, "../mine/variant.yaml") == Outer(iterations=7, enabled=False)
+    (tmp_path / "mine" / "variant.yaml").write_text("extends: missing.yaml\n")
+    with pytest.raises(ConfigError, match=r"missing\.yaml"):
+        load_config(Outer, tmp_path / "mine" / "variant.yaml")
 
 
 def test_extends_overrides_only_the_keys_it_names(tmp_path) -> None:

@@ -21,33 +21,17 @@ CLASSES = {
     "oracle": "hsqbench.planner.oracle:OracleConfig",
     "perception": "hsqbench.sim.perception:PerceptionConfig",
     "physics": "hsqbench.sim.physics:PhysicsConfig",
-    "planner": "hsqbench.planner.config:PlannerConfig",
+    "planner": "hsqbench.planner.hsq.config:PlannerConfig",
     "robot": "hsqbench.sim.robot:RobotConfig",
     "scene": "hsqbench.sim.scene:SceneConfig",
     "trial": "hsqbench.sim.trial:TrialConfig",
     "viewer": "hsqbench.viz.config:ViewerConfig",
+    "volumetric": "hsqbench.planner.learned.volumetric_config:VolumetricConfig",
 }
-#: Files that are not one class's defaults: protocols (hsqbench.experiment.config, whose
-#: object lists and sizes are the experiment itself) and variants that extend another file.
-NOT_DEFAULTS = {
-    "paper",
-    "paper3",
-    "paper3_facing",
-    "paper3_bodies",
-    "paper_pile",
-    "paper3_pile",
-    "paper_ablation",
-    "paper3_ablation",
-    "ycb_ablation",
-    "ycb3_ablation",
-    "quick",
-    "ycb",
-    "ycb3",
-    "ycb3_facing",
-    "ycb3_bodies",
-    "scene_resting",
-    "trial_resting",
-}
+#: Files that are not one class's defaults: variants that extend another file. The protocols
+#: (configs/protocols/, whose object lists and sizes are the experiment itself) are tested in
+#: tests/test_experiment_config.py.
+NOT_DEFAULTS = {"scene_resting", "trial_resting"}
 
 
 def _class(spec: str):

@@ -85,8 +85,8 @@ def test_every_grasp_has_a_finger_on_the_cloud_and_scores_in_order(planner):
     sits on the contact point the network chose, a point of the cloud it was given: the cleaned
     cloud (the planners' shared cleaning thins a dense cloud to voxel centroids), with the
     adapter's own input voxels off."""
-    from hsqbench.planner.api import resolve_config
     from hsqbench.planner.baselines.planner import clean_input
+    from hsqbench.planner.hsq.config import resolve_config
     from hsqbench.planner.learned.contact_graspnet import ContactGraspNetPlanner
 
     exact = ContactGraspNetPlanner(dataclasses.replace(planner.config, input_voxel_m=0.0))

@@ -8,7 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from hsqbench.config import ConfigError, from_dict
+from hsqbench.config import from_dict
+from hsqbench.errors import ConfigError
 from hsqbench.planner.grasp import Grasp
 from hsqbench.planner.learned import frames
 from hsqbench.planner.learned.config import ContactGraspNetConfig, load_contact_graspnet_config

@@ -107,7 +107,7 @@ def test_fingerprint_is_the_resolved_tree_and_follows_every_named_config(tmp_pat
 def test_overrides_reach_into_named_configs_and_change_the_fingerprint() -> None:
     """Overrides (dotted paths into the tree's data) apply before the dataclasses are built, in
     any named file; a path that is not in the tree is an error naming it."""
-    from hsqbench.config import ConfigError
+    from hsqbench.errors import ConfigError
 
     base = SimBackend("trial").fingerprint()
     friction = base["trial_config"]["physics"]["objects"]["friction"]

@@ -12,7 +12,9 @@ import pytest
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
 from hsqbench.experiment.report import (
     GSR_PLOT,
+    HEADLINE_PLOT,
     OUTCOMES_PLOT,
+    PAIRED_PLOT,
     TABLE1_CSV,
     TABLE2_CSV,
     TIMES_PLOT,
@@ -127,7 +129,7 @@ def test_plots_are_valid_pngs(run_dir: Path) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         write_report(run_dir)
-    for name in (GSR_PLOT, OUTCOMES_PLOT, TIMES_PLOT):
+    for name in (HEADLINE_PLOT, OUTCOMES_PLOT, PAIRED_PLOT, GSR_PLOT, TIMES_PLOT):
         path = run_dir / name
         assert path.read_bytes()[:8] == PNG_MAGIC
         image = imread(path)

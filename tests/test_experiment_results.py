@@ -221,3 +221,74 @@ def test_a_run_of_an_earlier_version_is_read_but_not_appended_to(tmp_path) -> No
     again = ResultStore(store.run_dir)
     with pytest.raises(ResultsError, match="use a new --run name"):
         again.prepare()
+
+
+def test_rows_carry_the_grasp_pose_scores_and_stage_times() -> None:
+    """The executed grasp in the world and in the object's frame (the two compose back), the
+    planner's best scores and each stage's time, each field exact."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from hsqbench.experiment.rows import numbers, pose_table
+    from hsqbench.sim.recorded_pose import from_pose7
+
+    run = _run(ISO)
+    attempt = replace(
+        run.result.attempts[0],
+        object_pose=(0.5, 0.1, 0.02, np.cos(0.4), 0.0, 0.0, np.sin(0.4)),
+        grasp_pose=(0.52, 0.08, 0.07, 0.0, 1.0, 0.0, 0.0),
+        grasp_flipped=True,
+        top_scores=(0.9, 0.8, 0.8),
+        motion_planning_s=0.25,
+        sim_time_s=12.5,
+        planner_stages_s={"recovery": 0.5, "total": 0.75},
+        ranks_tried=2,
+    )
+    run.result.attempts[0] = attempt
+    [row], _ = rows_for(run, "h", "v")
+    assert tuple(numbers(row["grasp_pose"])) == attempt.grasp_pose
+    assert row["grasp_flipped"] == "1" and row["ranks_tried"] == "2"
+    assert tuple(numbers(row["top_scores"])) == (0.9, 0.8, 0.8)
+    assert float(row["motion_planning_s"]) == 0.25 and float(row["sim_time_s"]) == 12.5
+    assert json.loads(row["planner_stages_s"]) == {"recovery": 0.5, "total": 0.75}
+    op, orot = from_pose7(numbers(row["object_pose"]))
+    lp, lrot = from_pose7(numbers(row["grasp_pose_object"]))
+    gp, grot = from_pose7(attempt.grasp_pose)
+    assert np.allclose(op + orot @ lp, gp) and np.allclose(orot @ lrot, grot)
+    assert np.allclose(lp, orot.T @ [0.02, -0.02, 0.05])
+    table = pose_table([row["grasp_pose"], ""])
+    assert table.shape == (2, 7) and np.isnan(table[1]).all()
+
+
+def test_a_committed_run_from_before_the_grasp_columns_loads_with_them_empty() -> None:
+    from pathlib import Path
+
+    import numpy as np
+
+    from hsqbench.experiment.rows import pose_table
+
+    run = Path(__file__).resolve().parents[1] / "results" / "latest"
+    rows = load_results(run).attempts
+    assert rows and all(r["grasp_pose"] == "" and r["top_scores"] == "" for r in rows)
+    assert np.isnan(pose_table([r["grasp_pose"] for r in rows])).all()
+    assert all(r["outcome"] for r in rows if r["status"] == "ok")  # its own columns are read
+
+
+def test_every_column_is_documented() -> None:
+    """docs/results-format.md has a row for each column of both files (meaning and units)."""
+    import re
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "results-format.md").read_text()
+    attempts, rounds = doc.split("## `rounds.csv`")
+    documented = {
+        part: set(re.findall(r"^\| ([^|]+) \|", text, re.M))
+        for part, text in (("a", attempts), ("r", rounds))
+    }
+    names = {
+        part: {n for cell in cells for n in re.findall(r"`(\w+)`", cell)}
+        for part, cells in documented.items()
+    }
+    assert set(ATTEMPT_COLUMNS) <= names["a"], sorted(set(ATTEMPT_COLUMNS) - names["a"])
+    assert set(ROUND_COLUMNS) <= names["r"], sorted(set(ROUND_COLUMNS) - names["r"])

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from hsqbench.config import ConfigError
+from hsqbench.errors import ConfigError
 from hsqbench.experiment.config import ExperimentConfig, load_experiment_config
 from hsqbench.experiment.seeds import (
     PackedDrawError,

@@ -26,3 +26,10 @@ def test_no_note_when_every_scene_was_at_rest_or_the_run_predates_the_column():
     assert unsettled_note(_attempts({"a": [""], "b": [""]}), META) is None
     assert unsettled_note(_attempts({"a": ["0.02"]}), {}) is None
     assert unsettled_note(pd.DataFrame({"trial_key": ["a"]}), META) is None
+
+
+def test_older_runs_name_the_physics_file_and_keep_its_settings_under_configs():
+    older = {"backend": {"trial_config": {"physics": "physics"},
+                         "configs": {"physics": {"settle_speed_mps": 0.005}}}}  # fmt: skip
+    note = unsettled_note(_attempts({"a": ["0.02"], "b": ["0.001"]}), older)
+    assert note is not None and note.startswith("1 of 2 scenes were still moving")

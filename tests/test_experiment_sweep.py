@@ -10,7 +10,7 @@ from dataclasses import replace
 import pandas as pd
 import pytest
 
-from hsqbench.config import ConfigError
+from hsqbench.errors import ConfigError
 from hsqbench.experiment.results import load_results
 from hsqbench.experiment.stats import Rate
 from hsqbench.experiment.sweep import CSV_FILE, SWEEP_FILE, point_config, run_sweep

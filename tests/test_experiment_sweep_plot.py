@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from hsqbench.experiment.plots.palette import FIXED
 from hsqbench.experiment.sweep_plot import draw_parameter
 
 PARAM = {
@@ -41,3 +42,5 @@ def test_a_planner_keeps_its_colour_in_every_panel():
     assert [set(p) for p in panels] == [{"hsq", "single-sq", "antipodal"}, {"hsq", "antipodal"}]
     assert panels[1] == {k: v for k, v in panels[0].items() if k in panels[1]}
     assert len(set(panels[0].values())) == 3
+    # ... and the colour it has in a run's report (one palette for every figure).
+    assert panels[0] == {p: FIXED[p] for p in ("hsq", "single-sq", "antipodal")}

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from hsqbench.config import ConfigError, load_config_data
+from hsqbench.config import load_config_data
+from hsqbench.errors import ConfigError
 from hsqbench.overrides import apply_overrides
 from hsqbench.sim.perception_config import PerceptionConfig
 from hsqbench.sim.physics import PhysicsConfig

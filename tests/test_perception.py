@@ -12,7 +12,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from hsqbench.config import ConfigError, from_dict
+from hsqbench.config import from_dict
+from hsqbench.errors import ConfigError
 from hsqbench.sim.camera import backproject, transform_points
 from hsqbench.sim.perception import (
     CropConfig,

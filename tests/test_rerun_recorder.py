@@ -11,8 +11,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from hsqbench.planner.candidates import REJECTION_REASONS
 from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.hsq.stage_two.candidates import REJECTION_REASONS
+from hsqbench.sim.outcome import WALL_CLOCK_FIELDS
 from hsqbench.sim.recorder import Recorder
 from hsqbench.viz.colors import NO_SCORE_COLOR, REASON_COLORS, score_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
@@ -26,8 +27,10 @@ OBJECT, SEED = "proc_box", 0
 
 def _outcomes(result) -> list[dict]:
     """The attempts without wall-clock timings (which differ from run to run)."""
-    drop = ("perception_s", "planning_s", "execution_s")
-    return [{k: v for k, v in a.to_dict().items() if k not in drop} for a in result.attempts]
+    return [
+        {k: v for k, v in a.to_dict().items() if k not in WALL_CLOCK_FIELDS}
+        for a in result.attempts
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -152,7 +155,7 @@ def test_cameras_follow_rerun_conventions(recorded):
 def test_recorded_geometry_matches_the_simulation(tmp_path):
     """Drive the recorder by hand: the logged object pose is MuJoCo's, the mesh is in the body
     frame, and the cloud and superquadrics of a plan are logged where they are."""
-    from hsqbench.planner.api import plan_grasps
+    from hsqbench.planner.hsq.planner import plan_grasps
     from hsqbench.sim.scene import build_scene
 
     model, data, info = build_scene("isolated", [OBJECT], SEED)

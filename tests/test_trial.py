@@ -25,7 +25,7 @@ from hsqbench.sim.motion import (
     Stepper,
     surface_speed_scale,
 )
-from hsqbench.sim.outcome import Outcome
+from hsqbench.sim.outcome import WALL_CLOCK_FIELDS, Outcome
 from hsqbench.sim.trial import (
     TrialConfig,
     TrialEnv,
@@ -48,7 +48,7 @@ def _timeless(result) -> dict:
     """A result's record without wall-clock timings."""
     out = result.to_dict()
     for a in out["attempts"]:
-        for key in ("perception_s", "planning_s", "execution_s"):
+        for key in WALL_CLOCK_FIELDS:
             a.pop(key)
     return out
 

@@ -142,16 +142,7 @@ def build_object(spec: ObjectSpec, config: AssetsConfig, cache_root: Path) -> Ob
     tmp = Path(tempfile.mkdtemp(prefix=f".tmp-{spec.name}-", dir=cache_root))
     try:
         write_obj(tmp / "visual.obj", visual.vertices, visual.faces, uv)
-        texture = None
-        if uv is not None and loaded.texture_file is not None:
-            texture = tmp / "texture.png"
-            if loaded.texture_file.suffix.lower() == ".png":
-                shutil.copyfile(loaded.texture_file, texture)
-            else:
-                _save_png(loaded.texture_file, texture)
-        elif uv is not None and loaded.texture_image is not None:
-            texture = tmp / "texture.png"
-            loaded.texture_image.save(texture)  # type: ignore[attr-defined]
+        texture = _write_texture(loaded, uv, tmp)
         hull_paths = []
         for k, hull in enumerate(hulls):
             hull_paths.append(tmp / f"hull_{k:02d}.obj")
@@ -184,16 +175,40 @@ def build_object(spec: ObjectSpec, config: AssetsConfig, cache_root: Path) -> Ob
         )
         _check_compiles(asset, label)
         (tmp / META_NAME).write_text(json.dumps(asset.to_meta(), indent=1))
-        try:
-            os.rename(tmp, final)
-        except OSError:
-            if not (final / META_NAME).is_file():  # not a concurrent build of the same entry
-                raise
-            shutil.rmtree(tmp, ignore_errors=True)
+        _publish(tmp, final)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return ObjectAsset.load(final)
+
+
+def _write_texture(loaded: _Loaded, uv: np.ndarray | None, folder: Path) -> Path | None:
+    """The mesh's texture as ``folder/texture.png`` (PNG copied, other formats converted), or
+    None when the visual mesh has no UVs or the source no texture."""
+    if uv is None:
+        return None
+    texture = folder / "texture.png"
+    if loaded.texture_file is not None:
+        if loaded.texture_file.suffix.lower() == ".png":
+            shutil.copyfile(loaded.texture_file, texture)
+        else:
+            _save_png(loaded.texture_file, texture)
+        return texture
+    if loaded.texture_image is not None:
+        loaded.texture_image.save(texture)  # type: ignore[attr-defined]
+        return texture
+    return None
+
+
+def _publish(tmp: Path, final: Path) -> None:
+    """Move a finished build into place in one rename; if a concurrent build of the same entry
+    got there first, its entry stands and this one is dropped."""
+    try:
+        os.rename(tmp, final)
+    except OSError:
+        if not (final / META_NAME).is_file():
+            raise
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _save_png(source: Path, target: Path) -> None:

@@ -30,6 +30,7 @@ import urllib.error
 import urllib.request
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, BinaryIO
 
 from hsqbench.assets.config import DownloadConfig, YcbObject
 from hsqbench.assets.ycb import CSV_COLUMNS, CSV_NAME, MESH_NAME, MTL_NAME, TEXTURE_NAME
@@ -110,15 +111,31 @@ def fetch(
     url: str, target: Path, config: DownloadConfig, expected_sha256: str | None, progress: bool
 ) -> None:
     """Download ``url`` to ``target`` through ``target.part`` (resumed if present), with checks."""
-    from tqdm import tqdm
-
     part = target.with_name(target.name + ".part")
     offset = part.stat().st_size if part.is_file() else 0
+    response = _open(url, part, offset, config)
+    with response:
+        status = response.status
+        if status not in (200, 206):
+            raise DownloadError(f"HTTP {status} for {url}")
+        if status == 200:
+            offset = 0  # the server ignored the Range request: start from the beginning
+        length = response.headers.get("Content-Length")
+        expected = offset + int(length) if length is not None else None
+        with part.open("ab" if status == 206 else "wb") as out:
+            _stream(response, out, url, config, _bar(expected, offset, target.name, progress))
+    _check_part(part, url, expected, config, expected_sha256)
+    os.replace(part, target)
+
+
+def _open(url: str, part: Path, offset: int, config: DownloadConfig) -> Any:
+    """The server's response to a GET of ``url``, asking for the bytes after ``offset`` (what
+    ``part`` holds already); a ``part`` the server cannot resume is deleted."""
     request = urllib.request.Request(url, headers={"User-Agent": "hsqbench"})
     if offset:
         request.add_header("Range", f"bytes={offset}-")
     try:
-        response = urllib.request.urlopen(request, timeout=config.timeout_s)
+        return urllib.request.urlopen(request, timeout=config.timeout_s)
     except urllib.error.HTTPError as exc:
         if exc.code == 416 and offset:  # the .part cannot be resumed: start again next time
             part.unlink()
@@ -128,38 +145,42 @@ def fetch(
         raise DownloadError(
             f"cannot reach {url}: {reason}; check the connection or --base-url"
         ) from exc
-    with response:
-        status = response.status
-        if status not in (200, 206):
-            raise DownloadError(f"HTTP {status} for {url}")
-        if status == 200:
-            offset = 0  # the server ignored the Range request: start from the beginning
-        length = response.headers.get("Content-Length")
-        expected = offset + int(length) if length is not None else None
-        mode = "ab" if status == 206 else "wb"
-        with (
-            part.open(mode) as out,
-            tqdm(
-                total=expected,
-                initial=offset,
-                unit="B",
-                unit_scale=True,
-                desc=target.name,
-                disable=not (progress and sys.stderr.isatty()),  # a log gets one line per object
-                leave=False,
-            ) as bar,
-        ):
-            while True:
-                try:
-                    chunk = response.read(config.chunk_bytes)
-                except OSError as exc:
-                    raise DownloadError(
-                        f"{url}: connection lost ({exc}); run again to resume"
-                    ) from exc
-                if not chunk:
-                    break
-                out.write(chunk)
-                bar.update(len(chunk))
+
+
+def _bar(expected: int | None, offset: int, name: str, progress: bool) -> Any:
+    """A byte progress bar on a terminal; a log gets one line per object, so none there."""
+    from tqdm import tqdm
+
+    return tqdm(
+        total=expected,
+        initial=offset,
+        unit="B",
+        unit_scale=True,
+        desc=name,
+        disable=not (progress and sys.stderr.isatty()),
+        leave=False,
+    )
+
+
+def _stream(response: Any, out: BinaryIO, url: str, config: DownloadConfig, bar: Any) -> None:
+    """Copy the response body to ``out`` chunk by chunk, advancing ``bar``."""
+    with bar:
+        while True:
+            try:
+                chunk = response.read(config.chunk_bytes)
+            except OSError as exc:
+                raise DownloadError(f"{url}: connection lost ({exc}); run again to resume") from exc
+            if not chunk:
+                break
+            out.write(chunk)
+            bar.update(len(chunk))
+
+
+def _check_part(
+    part: Path, url: str, expected: int | None, config: DownloadConfig, sha256: str | None
+) -> None:
+    """A whole download: the announced size (else keep it to resume), at least an archive's
+    size and the configured sha256 (else delete it: resuming cannot repair it)."""
     size = part.stat().st_size
     if expected is not None and size != expected:
         raise DownloadError(
@@ -171,14 +192,11 @@ def fetch(
             f"{url}: only {size} bytes (an archive has at least {config.min_archive_bytes}); "
             "is the base URL right?"
         )
-    if expected_sha256:
+    if sha256:
         digest = _sha256(part)
-        if digest != expected_sha256.lower():
+        if digest != sha256.lower():
             part.unlink()
-            raise DownloadError(
-                f"{url}: sha256 {digest} does not match the configured {expected_sha256}"
-            )
-    os.replace(part, target)
+            raise DownloadError(f"{url}: sha256 {digest} does not match the configured {sha256}")
 
 
 def _sha256(path: Path) -> str:

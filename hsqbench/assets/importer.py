@@ -7,6 +7,11 @@ the object is built; the build is cached like every other object. Mass is densit
 
 Name: the file stem, lower-cased, with other characters than ``[a-z0-9_]`` replaced by ``_``;
 for generic stems (``textured``, ``model``, ``mesh``, ``scan``) the parent folder's name is used.
+
+Size: mesh files carry no unit. A mesh whose largest extent, times ``scale``, is over
+:data:`MAX_EXTENT_M` or under :data:`MIN_EXTENT_M` is refused before anything is registered,
+with the ``--scale`` that would make it metres (a can exported in millimetres is 90 m tall at
+scale 1, and weighs tonnes).
 """
 
 from __future__ import annotations
@@ -22,6 +27,12 @@ from hsqbench.assets.build import UP_AXES, ObjectSpec
 MESH_SUFFIXES = (".obj", ".stl", ".ply")
 REGISTRY_DIR = "imported"
 _GENERIC_STEMS = {"textured", "model", "mesh", "scan", "model_normalized"}
+#: Largest extent an imported object may have, metres: the Panda's hand opens 8 cm and its
+#: reach is 0.855 m, so no graspable object spans a metre; a mesh that does is in other units.
+MAX_EXTENT_M = 1.0
+#: Smallest largest-extent, metres: below 5 mm (the size of the sensor's 3 mm voxels) nothing is
+#: seen to grasp; a mesh that small was scaled twice (metres given --scale 0.001).
+MIN_EXTENT_M = 0.005
 
 
 def registry_dir(cache_root: Path) -> Path:
@@ -42,6 +53,51 @@ def find_meshes(folder: Path) -> list[Path]:
     if not found:
         raise FileNotFoundError(f"{folder}: no mesh files ({', '.join(MESH_SUFFIXES)}) found")
     return found
+
+
+def largest_extent(path: Path) -> float:
+    """The largest side of a mesh file's axis-aligned bounding box, in the file's units."""
+    import trimesh
+
+    from hsqbench.assets.build import AssetError
+
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+    except Exception as exc:  # trimesh raises many types; name the file in ours
+        raise AssetError(f"{path}: cannot read the mesh ({exc})") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.vertices) == 0:
+        raise AssetError(f"{path}: the file holds no mesh")
+    return float(mesh.extents.max())
+
+
+def check_size(path: Path, scale: float) -> None:
+    """Refuse a mesh whose size at ``scale`` no graspable object has (see the module docstring).
+
+    Raises:
+        ValueError: one line naming the file, its size and the ``--scale`` to pass.
+    """
+    extent = largest_extent(path)
+    size_m = extent * scale
+    if MIN_EXTENT_M <= size_m <= MAX_EXTENT_M:
+        return
+    if size_m > MAX_EXTENT_M:
+        fix = next(
+            (
+                f"looks like {unit}: pass --scale {factor:g}"
+                for unit, factor in (("millimetres", 0.001), ("centimetres", 0.01))
+                if MIN_EXTENT_M <= extent * factor <= MAX_EXTENT_M and factor < scale
+            ),
+            f"pass the --scale that turns its units into metres (size / {MAX_EXTENT_M:g} m)",
+        )
+        bound = f"over the {MAX_EXTENT_M:g} m a graspable object can span"
+    else:
+        fix = (
+            "looks like metres: pass --scale 1"
+            if MIN_EXTENT_M <= extent <= MAX_EXTENT_M and scale != 1.0
+            else "pass the --scale that turns its units into metres"
+        )
+        bound = f"under the {MIN_EXTENT_M * 1000:g} mm the cameras can see"
+    raise ValueError(f"{path.name} is {size_m:.4g} m across at --scale {scale:g}, {bound}: {fix}")
 
 
 def register(
@@ -69,6 +125,10 @@ def register(
     taken = sorted(set(names) & reserved)
     if taken:
         raise ValueError(f"name(s) {taken} are taken by built-in objects; import with --prefix")
+    if not scale > 0:
+        raise ValueError(f"--scale must be > 0 (metres per file unit), got {scale}")
+    for path in meshes:  # every file checked before any record is written
+        check_size(path, scale)
     specs = [
         ObjectSpec(
             name=name,

@@ -1,7 +1,7 @@
 """``hsqbench ablate``: the benchmark with hsq, hsq-paper and hsq with each addition off.
 
 It only builds the planner list (``hsq``, ``hsq-paper``, ``hsq-no-<addition>`` for each chosen
-addition of :mod:`hsqbench.planner.additions`, plus any ``--with`` baselines) and runs the
+addition of :mod:`hsqbench.planner.hsq.additions`, plus any ``--with`` baselines) and runs the
 protocol's experiments with it through the benchmark runner, into results/<run>/ with the usual
 tables: each row against ``hsq`` is what that addition buys.
 """
@@ -17,7 +17,10 @@ HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions of
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--config", default="paper", help="protocol: paper, quick, or a YAML path (default: paper)"
+        "--config",
+        default="paper",
+        help="protocol: a name in configs/protocols/ (paper, paper3, ycb, ...) or a YAML path "
+        "(default: paper)",
     )
     parser.add_argument(
         "--run", default=None, metavar="NAME", help="run name under results/ (or a folder path)"
@@ -59,8 +62,8 @@ def ablation_planner_list(additions: list[str] | None, extra: tuple[str, ...] = 
     """
     import sys
 
-    from hsqbench.planner.additions import ADDITIONS, AdditionsConfig, planner_name
-    from hsqbench.planner.config import load_planner_config
+    from hsqbench.planner.hsq.additions import ADDITIONS, AdditionsConfig, planner_name
+    from hsqbench.planner.hsq.config import load_planner_config
 
     known = AdditionsConfig.names()
     off = load_planner_config().additions.off()

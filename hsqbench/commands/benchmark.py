@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from hsqbench.experiment.config import ExperimentConfig
     from hsqbench.experiment.runner import RunSummary
 
 HELP = "run the isolated and packed experiments of a protocol config and write results/<run>/"
@@ -16,7 +17,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--config",
         default="paper",
-        help="protocol: paper, quick, or a YAML path (default: paper)",
+        help="protocol: paper, ycb, quick... (configs/protocols/) or a YAML path; default paper",
     )
     parser.add_argument(
         "--run",
@@ -70,7 +71,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="move an existing run folder aside (<name>.replaced-<time>) and start again",
     )
+    _add_until_arguments(parser)
     parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
+    _add_rerun_arguments(parser)
+
+
+def _add_rerun_arguments(parser: argparse.ArgumentParser) -> None:
+    """--rerun-dir and what it records."""
     parser.add_argument(
         "--rerun-dir",
         type=Path,
@@ -90,6 +97,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="KEY",
         help="record this trial key (as in attempts.csv) instead; repeatable",
+    )
+
+
+def _add_until_arguments(parser: argparse.ArgumentParser) -> None:
+    """--until-halfwidth and its seed cap (:mod:`hsqbench.experiment.until_halfwidth`)."""
+    parser.add_argument(
+        "--until-halfwidth",
+        type=float,
+        default=None,
+        metavar="H",
+        help="add base seeds (after the protocol's) until every planner's GSR interval is at most "
+        "±H (e.g. 0.02), or --max-seeds is reached; recorded in run.json. Resume with the same "
+        "two options",
+    )
+    parser.add_argument(
+        "--max-seeds",
+        type=int,
+        default=10,
+        metavar="N",
+        help="with --until-halfwidth: at most N base seeds in all (default 10)",
     )
 
 
@@ -113,7 +140,6 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.experiment.backend import TrialRunnerUnavailable
     from hsqbench.experiment.config import load_experiment_config
     from hsqbench.experiment.executor import make_executor
-    from hsqbench.experiment.runner import run_benchmark
 
     if args.retry_errors and not args.resume:
         raise CommandError("--retry-errors only applies with --resume --run NAME")
@@ -129,23 +155,18 @@ def run(args: argparse.Namespace) -> int:
     executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)
     try:
-        summary = run_benchmark(
-            config,
-            run_dir,
-            executor=executor,
-            planners=planners,
-            experiments=args.experiments,
-            resume=args.resume,
-            force=args.force,
-            retry_errors=args.retry_errors,
-            config_name=args.config,
-        )
+        summary = _run_trials(args, config, run_dir, executor, planners)
     except TrialRunnerUnavailable as exc:
         raise CommandError(f"cannot run the benchmark: {exc}") from exc
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: finished trials are saved in {run_dir}; continue with\n"
-            f"  hsqbench benchmark --config {args.config} --run {run_dir} --resume",
+            f"  hsqbench benchmark --config {args.config} --run {run_dir} --resume"
+            + (
+                f" --until-halfwidth {args.until_halfwidth} --max-seeds {args.max_seeds}"
+                if args.until_halfwidth is not None
+                else ""
+            ),
             file=sys.stderr,
         )
         return 130
@@ -160,6 +181,44 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def _run_trials(
+    args: argparse.Namespace,
+    config: ExperimentConfig,
+    run_dir: Path,
+    executor: Any,
+    planners: tuple[str, ...] | list[str],
+) -> RunSummary:
+    """Run the protocol's trials, or with ``--until-halfwidth`` seed after seed."""
+    from hsqbench.experiment.runner import run_benchmark
+
+    forcing = [args.force]  # --force moves an old run aside once, never a step's own results
+
+    def run_seeds(
+        cfg: ExperimentConfig, base_seeds: tuple[int, ...] | None, resume: bool
+    ) -> RunSummary:
+        force, forcing[0] = forcing[0], False
+        return run_benchmark(
+            cfg,
+            run_dir,
+            executor=executor,
+            planners=planners,
+            experiments=args.experiments,
+            resume=resume,
+            force=force,
+            retry_errors=args.retry_errors,
+            config_name=args.config,
+            base_seeds=base_seeds,
+        )
+
+    if args.until_halfwidth is None:
+        return run_seeds(config, None, args.resume)
+    from hsqbench.experiment.until_halfwidth import run_until_halfwidth
+
+    return run_until_halfwidth(
+        config, run_dir, args.until_halfwidth, args.max_seeds, run_seeds, args.resume
+    )
 
 
 def print_summary(run_dir: Path, summary: RunSummary, report: bool) -> None:

@@ -19,6 +19,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="RUN_DIR",
         help="other runs of the same protocol and seeds whose further planners join the tables",
     )
+    parser.add_argument(
+        "--reference",
+        default=None,
+        metavar="PLANNER",
+        help="the planner every other is compared with on the same presentations (paired "
+        "section of tables.md; default hsq)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -26,6 +33,6 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.run_dir.is_dir():
         raise FileNotFoundError(f"{args.run_dir} is not a folder; give results/<run>")
-    for path in write_report(args.run_dir, tuple(args.with_runs)):
+    for path in write_report(args.run_dir, tuple(args.with_runs), args.reference):
         print(path)
     return 0

@@ -21,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "sweeps",
         nargs="*",
         metavar="SWEEP",
-        help="sweep configs: names in configs/sweeps/ (depth_noise, calibration, cameras, "
+        help="sweep configs: names in configs/protocols/sweeps/ (depth_noise, calibration, cameras, "
         "pad_friction) or YAML paths; or use --param and --values",
     )
     parser.add_argument(

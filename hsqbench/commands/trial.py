@@ -59,8 +59,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _check_names(args: argparse.Namespace) -> None:
     from hsqbench.assets.library import object_names
+    from hsqbench.assets.on_demand import fetch_missing
     from hsqbench.cli import CommandError
-    from hsqbench.planner import planner_names
+    from hsqbench.planner.registry import planner_names
+
+    # YCB objects not downloaded yet are fetched first, as `benchmark` does (without HSQ_YCB_DIR).
+    fetch_missing([args.object] if args.object else (args.objects or []))
 
     if args.planner not in planner_names():
         raise CommandError(

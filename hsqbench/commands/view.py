@@ -11,12 +11,20 @@ from pathlib import Path
 
 HELP = "open a recorded episode (.rrd from --rerun) in the Rerun viewer"
 
+#: Default ports of ``--web``: the viewer's page (Rerun's usual one) and the recording's server
+#: (next to Rerun's gRPC port 9876, so a running native viewer does not clash with it).
+WEB_PORT = 9090
+RRD_PORT = 9877
+
 _EPILOG = """\
 Record an episode with `hsqbench trial --object NAME --seed N --rerun OUT.rrd`.
 
 The native viewer needs a display (DISPLAY or WAYLAND_DISPLAY on Linux) and the `rerun`
 executable of the rerun-sdk package. Without them this prints a summary of the recording and how
-to open it elsewhere; --web serves it to a browser from this machine instead.
+to open it elsewhere; --web serves it to a browser from this machine instead: it prints the
+address that opens the episode (the web viewer's page on --web-port, the recording and its
+default layout served as files on --rrd-port) and serves until Ctrl-C. From another machine,
+forward both ports (ssh -L) and open the same address. Both servers sleep while idle.
 
 Exit status: 0 when the file is a readable recording (viewer started, or instructions printed),
 2 when it is missing or unreadable.
@@ -30,11 +38,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--web",
         action="store_true",
-        help="serve the web viewer over HTTP from here (blocks until Ctrl-C)",
+        help="serve the episode to a browser from here and print its address (until Ctrl-C)",
     )
     parser.add_argument(
-        "--port", type=int, default=9090, metavar="N", help="HTTP port of --web (default 9090)"
+        "--web-port",
+        type=int,
+        default=WEB_PORT,
+        metavar="N",
+        help=f"HTTP port of the web viewer's page (default {WEB_PORT}; 0: a free one)",
     )
+    parser.add_argument(
+        "--rrd-port",
+        type=int,
+        default=RRD_PORT,
+        metavar="N",
+        help=f"HTTP port that serves the recording to the page (default {RRD_PORT}; 0: a free one)",
+    )
+    parser.add_argument(
+        "--port", type=int, default=None, help=argparse.SUPPRESS
+    )  # the old name of --web-port, kept for one release
 
 
 def has_display(environ: dict[str, str] | None = None, platform: str | None = None) -> bool:
@@ -79,31 +101,68 @@ def _describe(summary) -> list[str]:
     return lines
 
 
+def _ports(args: argparse.Namespace) -> tuple[int, int]:
+    if args.port is not None:
+        print("note: --port is now --web-port (the old name goes in the next release)")
+        args.web_port = args.port
+    for name in ("web_port", "rrd_port"):
+        port = getattr(args, name)
+        if not 0 <= port <= 65535:
+            flag = "--" + name.replace("_", "-")
+            raise ValueError(f"{flag} must be a TCP port 0-65535 (0: a free one), got {port}")
+    if args.web_port and args.web_port == args.rrd_port:
+        raise ValueError(f"--web-port and --rrd-port are both {args.web_port}: give two ports")
+    return args.web_port, args.rrd_port
+
+
+def _wait() -> None:
+    """Block until Ctrl-C without using the CPU (the servers run in their own threads)."""
+    import threading
+
+    threading.Event().wait()
+
+
+def _serve_web(summary, web_port: int, rrd_port: int) -> int:
+    """Serve the recording and its default layout; print the address; wait for Ctrl-C."""
+    import tempfile
+
+    from hsqbench.viz.blueprint import episode_blueprint, save_blueprint
+    from hsqbench.viz.web import serve_files, serve_viewer, viewer_url
+
+    names = summary.camera_names
+    first = summary.camera_positions.get(f"world/cameras/{names[0]}") if names else None
+    layout = episode_blueprint(names, first, summary.floor_centre)
+    with tempfile.TemporaryDirectory(prefix="hsqbench-view-") as tmp:
+        rbl = save_blueprint(layout, Path(tmp) / f"{summary.path.stem}.rbl")
+        files = serve_files([summary.path, rbl], rrd_port)
+        try:
+            port = serve_viewer(web_port)
+            print(f"open {viewer_url(port, files.urls)}")
+            print(
+                f"(from another machine: ssh -L {port}:localhost:{port} -L {files.port}:"
+                f"localhost:{files.port} <this host>, then open the same address) Ctrl-C stops.",
+                flush=True,
+            )
+            _wait()
+        except KeyboardInterrupt:
+            pass
+        finally:
+            files.close()
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     from hsqbench.viz.rrd import read_recording
 
-    if not 1 <= args.port <= 65535:
-        raise ValueError(f"--port must be a TCP port 1-65535, got {args.port}")
+    web_port, rrd_port = _ports(args)
     summary = read_recording(args.path)  # FileNotFoundError / ValueError -> exit 2
     for line in _describe(summary):
         print(line)
+    if args.web:
+        return _serve_web(summary, web_port, rrd_port)
     exe = viewer_executable()
     pin = f"pip install rerun-sdk=={_sdk_version()}"
     path = str(args.path)
-    if args.web:
-        if exe is None:
-            print(f"the `rerun` executable is not installed here ({pin}); nothing to serve with")
-            return 0
-        print(
-            f"serving {path} at http://localhost:{args.port} (and gRPC on port 9876); from "
-            f"another machine: ssh -L {args.port}:localhost:{args.port} -L 9876:localhost:9876 "
-            "<this host>, then open the URL Rerun prints. Ctrl-C stops."
-        )
-        sys.stdout.flush()
-        try:
-            return subprocess.call([exe, "--web-viewer", "--web-viewer-port", str(args.port), path])
-        except KeyboardInterrupt:
-            return 0
     if exe is None:
         print(
             f"the Rerun viewer (`rerun`) is not installed; open it elsewhere with `rerun {path}` "

@@ -1,6 +1,6 @@
 """The benchmark: protocol, runner, results store and report (analysis apart from running).
 
-- :mod:`~hsqbench.experiment.config`: ``ExperimentConfig`` (``configs/paper.yaml``, ``quick.yaml``).
+- :mod:`~hsqbench.experiment.config`: ``ExperimentConfig`` (``configs/protocols/``).
 - :mod:`~hsqbench.experiment.seeds`: the trial list and each trial's derived seed.
 - :mod:`~hsqbench.experiment.backend`: ``TrialBackend`` (how one trial runs; ``SimBackend`` calls
   ``hsqbench.sim.trial``) and ``execute_trial`` (exceptions become error records).

@@ -15,6 +15,8 @@ from typing import Any
 
 import pandas as pd
 
+from hsqbench.experiment.run_data import RunData
+
 #: Protocol settings that decide which trials exist and what they present.
 _SAME = ("seeds", "trial_config", "isolated", "packed", "pile")
 
@@ -41,7 +43,7 @@ def _same(a: Any, b: Any) -> bool:
     return a == b
 
 
-def combine(main: Any, other: Any, other_dir: Path) -> None:
+def combine(main: RunData, other: RunData, other_dir: Path) -> None:
     """Add ``other``'s planners (those ``main`` lacks) to ``main`` in place, with a note.
 
     Raises:

@@ -1,4 +1,5 @@
-"""Benchmark protocol: ``configs/paper.yaml`` (and ``quick.yaml``) loaded into frozen dataclasses.
+"""Benchmark protocol: a file of ``configs/protocols/`` (``paper.yaml``, ``quick.yaml``, ...)
+loaded into frozen dataclasses (docs/protocols.md lists them).
 
 An :class:`ExperimentConfig` says *what* is run (objects, attempts, rounds, planners, seeds);
 *how* one trial runs (scene, robot, stop rule of a packed round) belongs to the trial runner's
@@ -7,10 +8,12 @@ own config, named here by ``trial_config`` and loaded by the simulation backend.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from hsqbench.config import ConfigError, load_config
+from hsqbench.config import from_dict, load_config_data, resolve_config_path
+from hsqbench.errors import ConfigError
 
 EXPERIMENTS = ("isolated", "packed", "pile")
 #: Experiments run as clutter-removal rounds (one record per round in ``rounds.csv``).
@@ -156,7 +159,7 @@ class ExperimentConfig:
     """One benchmark protocol.
 
     Attributes:
-        planners: planner names, resolved by the trial runner (``hsqbench.planner.get_planner``).
+        planners: planner names, resolved by the trial runner (``hsqbench.planner.registry.get_planner``).
         seeds: base seeds. Every trial's seed derives from (base seed, experiment, object, index)
             (see :mod:`hsqbench.experiment.seeds`); more base seeds repeat the whole protocol on
             fresh poses and narrow the confidence intervals.
@@ -207,6 +210,32 @@ class ExperimentConfig:
         return tuple(names)
 
 
+#: Top-level keys whose default a protocol file should state; left out, the loader says which
+#: default it took (they decide which methods run and how often).
+_STATED_DEFAULTS = ("planners", "seeds")
+
+
 def load_experiment_config(name_or_path: str | Path = "paper") -> ExperimentConfig:
-    """Load ``configs/<name>.yaml`` (``paper``, ``quick``) or a YAML path."""
-    return load_config(ExperimentConfig, name_or_path)
+    """Load ``configs/<name>.yaml`` (``paper``, ``quick``) or a YAML path (``extends:`` applied).
+
+    A protocol runs the experiments it names: a section (``isolated``, ``packed``, ``pile``)
+    that the file (with its ``extends:`` chain) leaves out is off, never the paper's default.
+    ``planners`` or ``seeds`` left out take their defaults, and a line on stderr says so.
+
+    Raises:
+        ConfigError: the file names no experiment, or a value is invalid.
+    """
+    path = resolve_config_path(name_or_path)
+    data = load_config_data(path)
+    if not any(e in data for e in EXPERIMENTS):
+        from_dict(ExperimentConfig, data, where=path.name)  # a wrong value is named first
+        raise ConfigError(
+            f"{path.name} names no experiment: add a section for one of {list(EXPERIMENTS)}, "
+            "e.g. isolated: {objects: [mug], attempts_per_object: 1}"
+        )
+    for e in EXPERIMENTS:
+        data.setdefault(e, {"enabled": False})
+    taken = [f"{k} {list(getattr(ExperimentConfig, k))}" for k in _STATED_DEFAULTS if k not in data]
+    if taken:
+        print(f"{path.name}: not stated, default taken: {'; '.join(taken)}", file=sys.stderr)
+    return from_dict(ExperimentConfig, data, where=path.name)

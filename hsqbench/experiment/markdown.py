@@ -3,20 +3,15 @@ outcomes and timings (definitions in :mod:`hsqbench.experiment.report`)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import pandas as pd
 
 from hsqbench.experiment.graspable import PRIVILEGED_NOTE, has_graspability
 from hsqbench.experiment.reported import CITATION, PROVENANCE
 from hsqbench.experiment.results import STATUS_ERROR
+from hsqbench.experiment.run_data import MEASURED, RunData
 from hsqbench.sim.outcome import Outcome
 
-if TYPE_CHECKING:
-    from hsqbench.experiment.report import RunData
-
-MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoCo backend
 OUTCOME_COLUMNS = (*[str(o) for o in Outcome], "error")
 
 
@@ -43,6 +38,16 @@ def _interval(row: pd.Series, prefix: str = "") -> str:
     return f"[{low:.1f}, {high:.1f}]"
 
 
+def _seeds(meta: dict) -> str:
+    """The base seeds that ran; with ``--until-halfwidth``, why there are that many."""
+    until = meta.get("until_halfwidth")
+    if not until:
+        return str(meta.get("config", {}).get("seeds", "?"))
+    target = f"±{100 * until['target_halfwidth']:g} points"
+    why = "reached" if until["reached"] else f"not reached within the cap of {until['max_seeds']}"
+    return f"{until['seeds_run']} (added until every GSR interval was within {target}: {why})"
+
+
 def _header(data: RunData, conf: str) -> list[str]:
     """Title, config and code version, error warning and the run's notes."""
     meta = data.meta
@@ -51,7 +56,7 @@ def _header(data: RunData, conf: str) -> list[str]:
     out.append(
         f"Config `{meta.get('config_name', '?')}` (hash `{meta.get('config_hash', '?')}`), "
         f"code {', '.join(f'`{v}`' for v in versions) or '?'}, base seeds "
-        f"{meta.get('config', {}).get('seeds', '?')}. Intervals: Wilson, {conf}."
+        f"{_seeds(meta)}. Intervals: Wilson, {conf}."
     )
     out.append("")
     n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0

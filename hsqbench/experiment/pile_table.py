@@ -10,16 +10,14 @@ comparison.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
+from hsqbench.experiment.run_data import RunData
 from hsqbench.experiment.stats import Rate
-
-if TYPE_CHECKING:
-    from hsqbench.experiment.report import RunData
 
 TABLE4_CSV = "table4_pile.csv"
 EXPERIMENT = "pile"

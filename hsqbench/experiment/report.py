@@ -17,9 +17,7 @@ the baselines); rows marked "measured, simulation (this run)" come from this run
 
 from __future__ import annotations
 
-import json
 import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -32,20 +30,21 @@ from hsqbench.experiment.graspable import (
     gsr_graspable,
     method_label,
 )
-from hsqbench.experiment.markdown import MEASURED, OUTCOME_COLUMNS, render_markdown
+from hsqbench.experiment.markdown import OUTCOME_COLUMNS, render_markdown
 from hsqbench.experiment.pile_table import TABLE4_CSV, render_table4, table4
-from hsqbench.experiment.plots import plot_gsr_per_object, plot_outcomes, plot_planning_time
-from hsqbench.experiment.reported import PROVENANCE, reported_rows
-from hsqbench.experiment.results import (
-    ATTEMPT_COLUMNS,
-    ROUND_COLUMNS,
-    RUN_FILE,
-    STATUS_ERROR,
-    STATUS_OK,
-    load_results,
+from hsqbench.experiment.plots import (  # noqa: F401 (the plot names are the report's API)
+    GSR_PLOT,
+    HEADLINE_PLOT,
+    OUTCOMES_PLOT,
+    PAIRED_PLOT,
+    TIMES_PLOT,
+    write_plots,
 )
-from hsqbench.experiment.settling import unsettled_note
+from hsqbench.experiment.reported import PROVENANCE, reported_rows
+from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
+from hsqbench.experiment.run_data import RunData, load_run
 from hsqbench.experiment.stats import Rate, summarize_times
+from hsqbench.experiment.verdicts import verdict_sections
 
 TABLES_MD = "tables.md"
 TABLE1_CSV = "table1_isolated.csv"
@@ -53,120 +52,6 @@ TABLE1_OBJECTS_CSV = "table1_per_object.csv"
 TABLE2_CSV = "table2_packed.csv"
 OUTCOMES_CSV = "outcomes.csv"
 TIMES_CSV = "planning_time.csv"
-GSR_PLOT = "gsr_per_object.png"
-OUTCOMES_PLOT = "outcomes.png"
-TIMES_PLOT = "planning_time.png"
-
-
-@dataclass
-class RunData:
-    """A run's complete trials as typed frames, and its metadata."""
-
-    attempts: pd.DataFrame
-    rounds: pd.DataFrame
-    meta: dict[str, Any]
-    planners: list[str]
-    objects: list[str]
-    confidence: float
-    notes: list[str] = field(default_factory=list)
-    measured: str = MEASURED  # provenance label of this run's rows (names a non-simulation backend)
-    # Planners joined from other runs (``--with``): planner -> their rows' provenance label.
-    joined: dict[str, str] = field(default_factory=dict)
-
-    def source(self, planner: str) -> str:
-        """The provenance label of ``planner``'s rows: this run's, or the run it was joined from."""
-        return self.joined.get(planner, self.measured)
-
-
-_NUMERIC = ("success", "attempt_index", "n_attempts", "base_seed", "planning_s", "trial_wall_s")
-_ROUND_NUMERIC = ("n_objects", "n_cleared", "n_lost", "n_attempts", "n_success", "base_seed")
-
-
-def load_run(run_dir: str | Path) -> RunData:
-    """Read ``attempts.csv``, ``rounds.csv`` and (if present) ``run.json`` of a run folder.
-
-    Raises:
-        FileNotFoundError: ``run_dir`` has no ``attempts.csv``.
-    """
-    run_dir = Path(run_dir)
-    if not any((run_dir / name).exists() for name in ("attempts.csv", "attempts.csv.gz")):
-        raise FileNotFoundError(
-            f"{run_dir}: no attempts.csv; give the folder of a run (results/<run>)"
-        )
-    results = load_results(run_dir)
-    notes = []
-    if results.partial_tail:
-        notes.append("a partial last line (run killed mid-write) was ignored")
-    if results.duplicate_keys:
-        notes.append(f"{len(results.duplicate_keys)} trial(s) recorded twice were counted once")
-    if results.incomplete_keys:
-        notes.append(f"{len(results.incomplete_keys)} incomplete trial(s) were left out")
-    meta: dict[str, Any] = {}
-    if (run_dir / RUN_FILE).exists():
-        meta = json.loads((run_dir / RUN_FILE).read_text())
-    attempts = pd.DataFrame(results.attempts, columns=list(ATTEMPT_COLUMNS), dtype=str)
-    rounds = pd.DataFrame(results.rounds, columns=list(ROUND_COLUMNS), dtype=str)
-    for col in _NUMERIC:
-        if col in attempts:
-            attempts[col] = pd.to_numeric(attempts[col], errors="coerce")
-    for col in _ROUND_NUMERIC:
-        if col in rounds:
-            rounds[col] = pd.to_numeric(rounds[col], errors="coerce")
-    config = meta.get("config", {})
-    seen_planners = list(dict.fromkeys(attempts["planner"])) if len(attempts) else []
-    planners = [p for p in config.get("planners", []) if p in seen_planners]
-    planners += [p for p in seen_planners if p not in planners]
-    iso = attempts[attempts["experiment"] == "isolated"] if len(attempts) else attempts
-    seen_objects = list(dict.fromkeys(iso["objects"])) if len(iso) else []
-    objects = [o for o in config.get("isolated", {}).get("objects", []) if o in seen_objects]
-    objects += [o for o in seen_objects if o not in objects]
-    hashes = set(attempts["config_hash"]) if len(attempts) else set()
-    if len(hashes) > 1:
-        notes.append(f"rows carry {len(hashes)} config hashes {sorted(hashes)}: results mixed")
-    broken = _stop_rule_violations(attempts, rounds, meta)
-    if broken:
-        notes.append(
-            f"{broken} packed or pile round(s) ended with objects left and without the stop rule's "
-            "reasons (consecutive failures, the attempt cap, an unstable simulation): check the "
-            "trial runner's stop rule (in a run older than the rounds' objects_lost column, an object "
-            "taken out of the workspace also looks left)"
-        )
-    if moving := unsettled_note(attempts, meta):
-        notes.append(moving)
-    confidence = float(config.get("confidence", 0.95))
-    backend = meta.get("backend", {}).get("backend")
-    if backend == "sim":
-        measured = MEASURED
-    elif backend is None:
-        measured = "measured (this run; backend unknown, run.json missing)"
-    else:
-        measured = f"measured, {backend} backend (this run)"
-    return RunData(attempts, rounds, meta, planners, objects, confidence, notes, measured)
-
-
-def _stop_rule_violations(attempts: pd.DataFrame, rounds: pd.DataFrame, meta: dict) -> int:
-    """Rounds that stopped although the stop rule (:mod:`hsqbench.sim.stop_rule`, with the
-    run's own ``packed:`` or ``pile:`` settings) says they should have gone on: objects left,
-    and none of the rule's reasons (failures in a row, the cap, ...) ended them."""
-    from hsqbench.config import from_dict
-    from hsqbench.sim.stop_rule import PackedConfig
-
-    backend = meta.get("backend") or {}
-    count = 0
-    ok_rounds = rounds[rounds["status"] == STATUS_OK]
-    ok = attempts[attempts["status"] == STATUS_OK]
-    by_key = {k: g.sort_values("attempt_index") for k, g in ok.groupby("trial_key")}
-    for _, r in ok_rounds.iterrows():
-        kind = str(r["trial_key"]).split("/", 1)[0]
-        stored = (backend.get("trial_config") or {}).get(kind, backend.get(kind))
-        rule = from_dict(PackedConfig, stored) if isinstance(stored, dict) else PackedConfig()
-        tail = by_key.get(r["trial_key"])
-        outcomes = [] if tail is None else [str(o) for o in tail["outcome"]]
-        # Runs before objects_lost existed read it empty: an object lost there looks left.
-        out = r["n_cleared"] + (0 if pd.isna(r.get("n_lost")) else r["n_lost"])
-        if rule.ended_early(outcomes, objects_left=out < r["n_objects"]):
-            count += 1
-    return count
 
 
 def _ok(df: pd.DataFrame, experiment: str, planner: str | None = None) -> pd.DataFrame:
@@ -368,12 +253,18 @@ def time_table(data: RunData) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) -> list[Path]:
+def write_report(
+    run_dir: str | Path, with_runs: tuple[str | Path, ...] = (), reference: str | None = None
+) -> list[Path]:
     """Write ``tables.md``, the table CSVs and the PNG plots into ``run_dir``; returns the paths.
 
     ``with_runs``: other runs of the same protocol whose further planners join the tables
-    (:mod:`hsqbench.experiment.combine`). Warns (``UserWarning``) when trials failed with
-    infrastructure errors.
+    (:mod:`hsqbench.experiment.combine`). ``reference``: the planner the paired section compares
+    every other with (default hsq; :mod:`hsqbench.experiment.verdicts`). Warns
+    (``UserWarning``) when trials failed with infrastructure errors.
+
+    Raises:
+        ValueError: ``reference`` did not run.
     """
     from hsqbench.experiment.combine import combine
 
@@ -384,6 +275,7 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
     t1, t1o, t2 = table1(data), table1_per_object(data), table2(data)
     outcomes, times = outcome_table(data), time_table(data)
     t4 = table4(data)
+    judged, judged_lines = verdict_sections(data, reference)
     written = []
     for name, df in (
         (TABLE1_CSV, t1),
@@ -391,6 +283,7 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
         (TABLE2_CSV, t2),
         (OUTCOMES_CSV, outcomes),
         (TIMES_CSV, times),
+        *judged.items(),
     ):
         df.to_csv(run_dir / name, index=False)
         written.append(run_dir / name)
@@ -398,17 +291,10 @@ def write_report(run_dir: str | Path, with_runs: tuple[str | Path, ...] = ()) ->
         t4.to_csv(run_dir / TABLE4_CSV, index=False)
         written.append(run_dir / TABLE4_CSV)
     md = run_dir / TABLES_MD
-    md.write_text(render_markdown(data, t1, t1o, t2, outcomes, times, render_table4(data, t4)))
+    after = [*render_table4(data, t4), *judged_lines]
+    md.write_text(render_markdown(data, t1, t1o, t2, outcomes, times, after))
     written.append(md)
-    if not t1o.empty:
-        plot_gsr_per_object(data, t1o, run_dir / GSR_PLOT)
-        written.append(run_dir / GSR_PLOT)
-    if not outcomes.empty:
-        plot_outcomes(outcomes, run_dir / OUTCOMES_PLOT)
-        written.append(run_dir / OUTCOMES_PLOT)
-    if not times.empty:
-        plot_planning_time(data, run_dir / TIMES_PLOT)
-        written.append(run_dir / TIMES_PLOT)
+    written += write_plots(data, t1o, outcomes, judged, run_dir)
     n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0
     if n_err:
         warnings.warn(

@@ -8,9 +8,13 @@ import math
 from datetime import UTC, datetime
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from hsqbench.experiment.backend import TrialRun
 from hsqbench.experiment.config import ROUND_EXPERIMENTS
-from hsqbench.sim.outcome import RoundResult
+from hsqbench.sim.outcome import Attempt, RoundResult
+from hsqbench.sim.recorded_pose import pose7_in_frame
 
 ATTEMPTS_FILE = "attempts.csv"
 ROUNDS_FILE = "rounds.csv"
@@ -42,9 +46,17 @@ ATTEMPT_COLUMNS = (
     *FACTOR_NAMES,
     "factors",
     "width_m",
+    "grasp_pose",
+    "grasp_flipped",
+    "grasp_pose_object",
+    "top_scores",
     "perception_s",
     "planning_s",
     "execution_s",
+    "motion_planning_s",
+    "sim_time_s",
+    "planner_stages_s",
+    "ranks_tried",
     "detail",
     "scene_settle_s",
     "scene_max_speed",
@@ -88,6 +100,8 @@ VOLATILE_COLUMNS = (
     "perception_s",
     "planning_s",
     "execution_s",
+    "motion_planning_s",
+    "planner_stages_s",
     "trial_wall_s",
     "worker",
     "code_version",
@@ -110,6 +124,36 @@ def _fmt(value: Any) -> str:
         return str(value)
     text = str(value)
     return text.replace("\r", " ").replace("\n", " | ") if ("\n" in text or "\r" in text) else text
+
+
+def _numbers(values: Any) -> str:
+    """A sequence of floats as one field: space-separated, each exact (``repr``)."""
+    return " ".join(repr(float(x)) for x in values)
+
+
+def numbers(field: str) -> NDArray[np.float64]:
+    """The floats of a field written by :func:`_numbers` (a pose column, ``top_scores``);
+    empty for an empty field (older runs, or nothing recorded)."""
+    return np.array([float(x) for x in field.split()], dtype=np.float64)
+
+
+def pose_table(fields: Any) -> NDArray[np.float64]:
+    """(N, 7) array of a pose column's fields (``x y z qw qx qy qz``), a row of NaN where a
+    field is empty: ``pose_table(frame["grasp_pose"])``."""
+    rows = [numbers(str(f)) if isinstance(f, str) else np.zeros(0) for f in fields]
+    return np.array([r if r.size == 7 else np.full(7, np.nan) for r in rows]).reshape(-1, 7)
+
+
+def _grasp_fields(a: Attempt) -> dict[str, Any]:
+    """The grasp pose columns: world, and in the frame of the object at ``object_pose``."""
+    if not a.grasp_pose:
+        return {}
+    in_object = pose7_in_frame(a.grasp_pose, a.object_pose) if a.object_pose else ()
+    return {
+        "grasp_pose": _numbers(a.grasp_pose),
+        "grasp_flipped": a.grasp_flipped,
+        "grasp_pose_object": _numbers(in_object),
+    }
 
 
 def _now() -> str:
@@ -145,7 +189,7 @@ def _attempt_records(run: TrialRun, common: dict[str, Any]) -> list[dict[str, An
                     "success": a.success,
                     "graspable": a.graspable,
                     "target": a.target,
-                    "object_pose": " ".join(repr(float(x)) for x in a.object_pose),
+                    "object_pose": _numbers(a.object_pose),
                     "resting_pose": a.resting_pose,
                     "rank_executed": a.rank_executed,
                     "n_grasps": a.n_grasps,
@@ -153,9 +197,17 @@ def _attempt_records(run: TrialRun, common: dict[str, Any]) -> list[dict[str, An
                     **{k: float(a.factors[k]) for k in FACTOR_NAMES if k in a.factors},
                     "factors": json.dumps(a.factors, sort_keys=True) if a.factors else "",
                     "width_m": float(a.width_m),
+                    **_grasp_fields(a),
+                    "top_scores": _numbers(a.top_scores),
                     "perception_s": float(a.perception_s),
                     "planning_s": float(a.planning_s),
                     "execution_s": float(a.execution_s),
+                    "motion_planning_s": float(a.motion_planning_s),
+                    "sim_time_s": float(a.sim_time_s),
+                    "planner_stages_s": (
+                        json.dumps(a.planner_stages_s, sort_keys=True) if a.planner_stages_s else ""
+                    ),
+                    "ranks_tried": a.ranks_tried,
                     "detail": a.detail,
                 }
             )

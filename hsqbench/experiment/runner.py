@@ -11,7 +11,7 @@ from __future__ import annotations
 import itertools
 import sys
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -117,14 +117,15 @@ def run_benchmark(
     retry_errors: bool = False,
     progress: bool = True,
     config_name: str = "",
+    base_seeds: Iterable[int] | None = None,
 ) -> RunSummary:
     """Run (or resume) the trials of ``config`` into ``run_dir``.
 
     Args:
         backend: runs one trial; default :class:`SimBackend` (the MuJoCo trial runner).
         executor: default in-process (:class:`SerialExecutor`).
-        planners, experiments: run only these (the config, and so the hash, is unchanged, so a
-            later ``resume`` can add the others to the same run).
+        planners, experiments, base_seeds: run only these (the config, and so the hash, is
+            unchanged, so a later ``resume`` can add the others to the same run).
         resume: continue an existing run folder (a missing folder starts a new run).
         force: move an existing run folder aside (``<name>.replaced-<UTC time>``) and start anew.
         retry_errors: when resuming, run again the trials recorded as errors.
@@ -141,7 +142,9 @@ def run_benchmark(
     executor = executor if executor is not None else SerialExecutor()
     store = ResultStore(run_dir)
     meta = _existing_run(store, run_dir, resume, force)
-    specs, unusable = _select(config, backend, executor, planners, experiments, progress)
+    # A subset of the config's seeds (--until-halfwidth adds them); the hash keeps them all.
+    chosen = config if base_seeds is None else _only_seeds(config, base_seeds)
+    specs, unusable = _select(chosen, backend, executor, planners, experiments, progress)
     fingerprint = backend.fingerprint()
     chash = config_hash(RunIdentity(config, fingerprint))
     specs = list(specs)
@@ -177,6 +180,16 @@ def run_benchmark(
             progress,
         )
     return summary
+
+
+def _only_seeds(config: ExperimentConfig, base_seeds: Iterable[int]) -> ExperimentConfig:
+    """``config`` restricted to those of its seeds in ``base_seeds`` (at least one)."""
+    keep = tuple(s for s in config.seeds if s in set(base_seeds))
+    if not keep:
+        raise ValueError(
+            f"base_seeds {list(base_seeds)}: none is among the config's {config.seeds}"
+        )
+    return replace(config, seeds=keep)
 
 
 def _record_draws(meta: dict, draws: dict[str, dict], progress: bool) -> None:

@@ -13,7 +13,10 @@ def unsettled_note(attempts: pd.DataFrame, meta: dict[str, Any]) -> str | None:
     with the largest speed; ``None`` when none did, or when the run predates the column."""
     if "scene_max_speed" not in attempts or not len(attempts):
         return None
-    physics = meta.get("backend", {}).get("trial_config", {}).get("physics", {})
+    backend = meta.get("backend", {})
+    physics = backend.get("trial_config", {}).get("physics", {})
+    if isinstance(physics, str):  # older runs name the file; its settings are under configs
+        physics = backend.get("configs", {}).get("physics", {})
     limit = physics.get("settle_speed_mps")
     speeds = pd.to_numeric(
         attempts.drop_duplicates("trial_key")["scene_max_speed"], errors="coerce"

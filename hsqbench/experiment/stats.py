@@ -1,4 +1,5 @@
-"""Rates with Wilson score intervals, and summary statistics of timings.
+"""Rates with Wilson score intervals (scipy's ``binomtest(...).proportion_ci``), and summary
+statistics of timings.
 
 Wilson interval of k successes in n Bernoulli trials at confidence 1 - a, with z = Phi^-1(1 - a/2)
 and p = k / n:
@@ -12,12 +13,11 @@ interval, which is why benchmark papers with 100-odd attempts use it.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from statistics import NormalDist
 
 import numpy as np
+from scipy.stats import binomtest
 
 
 def wilson_interval(successes: int, trials: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -32,15 +32,10 @@ def wilson_interval(successes: int, trials: int, confidence: float = 0.95) -> tu
         raise ValueError(f"successes must be in [0, {trials}], got {successes}")
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence must be in (0, 1), got {confidence}")
-    z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
-    n = float(trials)
-    p = successes / n
-    denom = 1.0 + z * z / n
-    centre = (p + z * z / (2.0 * n)) / denom
-    half = z / denom * math.sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n))
+    ci = binomtest(int(successes), int(trials)).proportion_ci(confidence, method="wilson")
     # The exact bounds at k = 0 and k = n are 0 and 1; clip rounding noise there.
-    low = 0.0 if successes == 0 else max(0.0, centre - half)
-    high = 1.0 if successes == trials else min(1.0, centre + half)
+    low = 0.0 if successes == 0 else max(0.0, float(ci.low))
+    high = 1.0 if successes == trials else min(1.0, float(ci.high))
     return low, high
 
 

@@ -1,6 +1,6 @@
 """A robustness sweep: protocols, planners and seeds, and parameters each stepped over points.
 
-``configs/sweeps/<name>.yaml`` (or ``hsqbench sweep --param PATH --values ...``) loaded into
+``configs/protocols/sweeps/<name>.yaml`` (or ``hsqbench sweep --param PATH --values ...``) loaded into
 frozen dataclasses. A point is a set of config overrides (:mod:`hsqbench.overrides`) with a label
 and a position on the plot's axis; one parameter may move several values together (a
 calibration error's translation and rotation). Every point of every protocol is an ordinary run
@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from hsqbench.config import ConfigError, load_config
+from hsqbench.config import load_config
+from hsqbench.errors import ConfigError
 from hsqbench.experiment.config import EXPERIMENTS
 
 
@@ -129,7 +130,7 @@ class SweepProtocol:
 
 @dataclass(frozen=True)
 class SweepConfig:
-    """One sweep (``configs/sweeps/*.yaml``).
+    """One sweep (``configs/protocols/sweeps/*.yaml``).
 
     Attributes:
         protocols: where the parameters are stepped (each point runs on every protocol).
@@ -163,13 +164,17 @@ class SweepConfig:
 
 
 def load_sweep_config(name_or_path: str | Path) -> SweepConfig:
-    """``configs/sweeps/<name>.yaml`` (``depth_noise``), a name under ``configs/`` or a path."""
+    """``configs/protocols/sweeps/<name>.yaml`` (``depth_noise``), a name under ``configs/`` or a
+    path."""
     path = Path(name_or_path)
     if not path.suffix and "/" not in str(name_or_path):
-        from hsqbench.settings import CONFIG_DIR
+        from hsqbench.settings import SWEEP_DIR
 
-        if not (CONFIG_DIR / "sweeps" / f"{name_or_path}.yaml").exists():
-            known = sorted(p.stem for p in (CONFIG_DIR / "sweeps").glob("*.yaml"))
-            raise ConfigError(f"no sweep {name_or_path!r} in configs/sweeps/; known: {known}")
-        name_or_path = f"sweeps/{name_or_path}"
+        path = SWEEP_DIR / f"{name_or_path}.yaml"
+        if not path.exists():
+            known = sorted(p.stem for p in SWEEP_DIR.glob("*.yaml"))
+            raise ConfigError(
+                f"no sweep {str(name_or_path)!r} in configs/protocols/sweeps/; known: {known}"
+            )
+        name_or_path = path
     return load_config(SweepConfig, name_or_path)

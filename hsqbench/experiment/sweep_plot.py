@@ -9,6 +9,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from hsqbench.experiment.plots.palette import planner_colours
+
 
 def _figure(width: float, height: float) -> Any:
     from matplotlib.figure import Figure  # Agg canvas, no pyplot global state
@@ -53,7 +55,7 @@ def draw_parameter(rows: pd.DataFrame, param: dict[str, Any]) -> Any:
     ]
     fig = _figure(4.6 * min(3, len(panels)), 3.6 * int(np.ceil(len(panels) / 3)))
     level = round(100 * float(rows["confidence"].iloc[0]))
-    colours = {p: f"C{i}" for i, p in enumerate(dict.fromkeys(rows["planner"]))}
+    colours = planner_colours(list(dict.fromkeys(rows["planner"])))
     for k, (proto, exp, prefix, title) in enumerate(panels):
         ax = fig.add_subplot(int(np.ceil(len(panels) / 3)), min(3, len(panels)), k + 1)
         mine = rows[(rows["protocol"] == proto) & (rows["experiment"] == exp)]

@@ -17,14 +17,14 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hsqbench.planner.candidates import REJECTION_REASONS
 from hsqbench.planner.cleaning import (
     CleanedCloud,
     CleaningConfig,
     all_removed_reason,
     clean_cloud,
 )
-from hsqbench.planner.elimination import RULE_DESCRIPTIONS
+from hsqbench.planner.hsq.stage_two.candidates import REJECTION_REASONS
+from hsqbench.planner.hsq.stage_two.elimination import RULE_DESCRIPTIONS
 
 if TYPE_CHECKING:
     from hsqbench.planner.api import PlanningContext, PlanResult

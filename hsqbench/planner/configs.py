@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from hsqbench.planner.baselines.config import BaselinesConfig
-from hsqbench.planner.config import PlannerConfig
+from hsqbench.planner.hsq.config import PlannerConfig
 from hsqbench.planner.learned.config import ContactGraspNetConfig
 from hsqbench.planner.oracle import OracleConfig
 

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.config import load_config
+from hsqbench.config import load_cached, load_config
 
 
 @dataclass(frozen=True)
@@ -103,3 +103,8 @@ class GripperModel:
 def load_gripper(name_or_path: str | Path = "gripper") -> GripperModel:
     """Load a gripper from ``configs/<name>.yaml`` (or a YAML path)."""
     return load_config(GripperModel, name_or_path)
+
+
+def resolve_gripper(name_or_path: str | Path) -> GripperModel:
+    """The gripper of ``configs/<name>.yaml`` (or a YAML path), parsed once per modification."""
+    return load_cached(load_gripper, name_or_path)

@@ -35,11 +35,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hsqbench.config import load_config
-from hsqbench.planner.api import PlanningContext, PlanResult, resolve_config, resolve_gripper
-from hsqbench.planner.candidates import CandidateSet, ClosingLines
-from hsqbench.planner.config import GraspConfig
-from hsqbench.planner.elimination import approach_openings, body_hits, line_boxes, table_clear
-from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.api import PlanningContext, PlanResult
+from hsqbench.planner.gripper import GripperModel, resolve_gripper
+from hsqbench.planner.hsq.config import GraspConfig, resolve_config
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet, ClosingLines
+from hsqbench.planner.hsq.stage_two.elimination import (
+    approach_openings,
+    body_hits,
+    line_boxes,
+    table_clear,
+)
 from hsqbench.planner.truth import ObjectTruth, SceneTruth
 
 #: A facet point this close to another hull of the same object is on a joint between hulls (CoACD

@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
-from hsqbench.planner.additions import AdditionsConfig, ablation_planners
+from hsqbench.planner.hsq.additions import AdditionsConfig, ablation_planners
 
 if TYPE_CHECKING:
     from hsqbench.planner.api import Planner
@@ -25,7 +25,7 @@ PlannerFactory = Callable[..., "Planner"]
 
 
 def _hsq(config: Any = None) -> Planner:
-    from hsqbench.planner.api import HSQPlanner
+    from hsqbench.planner.hsq.planner import HSQPlanner
 
     return HSQPlanner(config)
 
@@ -43,10 +43,10 @@ def _antipodal(config: Any = None) -> Planner:
 
 
 def _hsq_without(off: tuple[str, ...], name: str) -> PlannerFactory:
-    """hsq with the additions ``off`` switched off (hsqbench.planner.additions)."""
+    """hsq with the additions ``off`` switched off (hsqbench.planner.hsq.additions)."""
 
     def factory(config: Any = None) -> Planner:
-        from hsqbench.planner.api import HSQPlanner
+        from hsqbench.planner.hsq.planner import HSQPlanner
 
         return HSQPlanner(config, additions_off=off, name=name)
 
@@ -67,12 +67,26 @@ def _contact_graspnet(config: Any = None, *, eliminate: bool = False) -> Planner
     return ContactGraspNetPlanner(config, eliminate=eliminate, name=name)
 
 
+def _volumetric(network: str) -> PlannerFactory:
+    """VGN or GIGA (optional extra ``learned``, torch only; hsqbench.planner.learned.volumetric)."""
+
+    def factory(config: Any = None) -> Planner:
+        from hsqbench.planner.learned.volumetric import VolumetricPlanner
+
+        return VolumetricPlanner(network, config)
+
+    return factory
+
+
 _FACTORIES: dict[str, PlannerFactory] = {
     "hsq": _hsq,
     "single-sq": _single_sq,
     "antipodal": _antipodal,
     "contact-graspnet": _contact_graspnet,
     "contact-graspnet-elim": lambda config=None: _contact_graspnet(config, eliminate=True),
+    # The volumetric learned baselines with their published weights (configs/volumetric.yaml).
+    "vgn": _volumetric("vgn"),
+    "giga": _volumetric("giga"),
     # The paper's rules alone, and hsq with one addition off (the ablation planners).
     "hsq-paper": _hsq_without(tuple(AdditionsConfig.names()), "hsq-paper"),
     **{name: _hsq_without((addition,), name) for name, addition in ablation_planners().items()},
@@ -106,6 +120,10 @@ def unavailable(name: str) -> str | None:
         from hsqbench.planner.learned.network import INSTALL_HINT, available
 
         return None if available() else INSTALL_HINT
+    if name in ("vgn", "giga") and name in _FACTORIES:
+        from hsqbench.planner.learned import volumetric
+
+        return None if volumetric.available() else volumetric.INSTALL_HINT
     return None
 
 
@@ -157,8 +175,8 @@ def get_planner(name: str, config: Any = None) -> Planner:
 
     Raises:
         ValueError: unknown ``name``; the message lists the registered names.
-        LearnedExtraMissing: (a RuntimeError) ``contact-graspnet*`` without the ``learned``
-            extra; the message says how to install it.
+        LearnedExtraMissing: (a RuntimeError) ``contact-graspnet*``, ``vgn`` or ``giga``
+            without the ``learned`` extra; the message says how to install it.
     """
     try:
         factory = _FACTORIES[name]

@@ -10,6 +10,16 @@ from dataclasses import asdict, dataclass, field
 from enum import StrEnum
 from typing import Any
 
+#: Fields of :class:`Attempt` that measure the machine (wall-clock seconds), not the trial: two
+#: runs of one seed differ in these only.
+WALL_CLOCK_FIELDS = (
+    "perception_s",
+    "planning_s",
+    "execution_s",
+    "motion_planning_s",
+    "planner_stages_s",
+)
+
 
 class Outcome(StrEnum):
     """The fixed list of attempt outcomes."""
@@ -43,6 +53,18 @@ class Attempt:
         object_pose: (x, y, z, qw, qx, qy, qz) of ``target`` (of the only object when there is
             no target) when the cloud was taken; empty when unknown.
         resting_pose: index of that object's resting pose in the scene (-1: upright).
+        grasp_pose: (x, y, z, qw, qx, qy, qz) world pose of the TCP at the executed grasp (as
+            executed: the planner's grasp, or its twin turned by pi about the approach axis,
+            ``grasp_flipped``); for ``unreachable``, the planner's best grasp, which no motion
+            reached; empty when no grasp was planned.
+        grasp_flipped: the executed grasp is the planner's turned by pi about its approach axis.
+        top_scores: scores of the planner's first grasps, best first (at most the trial config's
+            ``recorded_scores``).
+        motion_planning_s: wall-clock seconds of motion planning (IK), part of ``execution_s``.
+        sim_time_s: simulated seconds of the executed motion (0 when nothing was executed).
+        planner_stages_s: the planner's own wall-clock seconds per stage
+            (``PlanResult.timings``; empty when it reports none).
+        ranks_tried: distinct grasps motion-planned in this attempt.
     """
 
     outcome: Outcome
@@ -59,6 +81,13 @@ class Attempt:
     graspable: bool | None = None
     object_pose: tuple[float, ...] = ()
     resting_pose: int = -1
+    grasp_pose: tuple[float, ...] = ()
+    grasp_flipped: bool = False
+    top_scores: tuple[float, ...] = ()
+    motion_planning_s: float = 0.0
+    sim_time_s: float = 0.0
+    planner_stages_s: dict[str, float] = field(default_factory=dict)
+    ranks_tried: int = 0
 
     @property
     def success(self) -> bool:

@@ -18,7 +18,7 @@ _VIRIDIS = np.array(
     dtype=np.float64,
 )
 
-#: Candidates removed by each elimination rule (``hsqbench.planner.candidates.REJECTION_REASONS``).
+#: Candidates removed by each elimination rule (``hsqbench.planner.hsq.stage_two.candidates.REJECTION_REASONS``).
 REASON_COLORS: dict[str, tuple[int, int, int, int]] = {
     "duplicate": (90, 110, 160, 255),  # slate: the same line exists from a better superquadric
     "width": (150, 150, 150, 255),  # grey: never a possible grasp

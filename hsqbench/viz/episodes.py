@@ -115,8 +115,9 @@ def choose_trials(
     return choices if limit is None else choices[: max(0, int(limit))]
 
 
-def run_trial_config(run_dir: str | Path) -> Any:
-    """The :class:`~hsqbench.sim.trial.TrialConfig` a run used (from its ``run.json``)."""
+def run_trial_config(run_dir: str | Path, overrides: dict[str, Any] | None = None) -> Any:
+    """The :class:`~hsqbench.sim.trial.TrialConfig` a run used (from its ``run.json``), with
+    ``overrides`` (dotted path -> value) applied."""
     from hsqbench.experiment.results import RUN_FILE
     from hsqbench.sim.trial.config import trial_config_from_record
 
@@ -130,7 +131,7 @@ def run_trial_config(run_dir: str | Path) -> Any:
             f"{path} holds no trial config (backend {meta.get('backend', {}).get('backend')!r}): "
             "only runs of the simulation backend can be replayed"
         )
-    return trial_config_from_record(stored, where=f"{path.name} trial_config")
+    return trial_config_from_record(stored, f"{path.name} trial_config", overrides)
 
 
 def record_trial(choice: TrialChoice, trial_config: Any, path: str | Path, viewer_config=None):

@@ -102,6 +102,17 @@ def _log_candidates(rec: Any, rr: Any, cfg: ViewerConfig, cands: Any) -> None:
         )
 
 
+def _log_plan_geometry(rec: Any, rr: Any, cfg: ViewerConfig, plan: Any) -> None:
+    """A plan's candidates (if any) and its planner's own surface points (if any: the vgn and
+    giga planners' TSDF zero crossings, ``PlanResult.surface_points``)."""
+    cands = getattr(plan, "candidates", None)
+    if cands is not None and len(cands):
+        _log_candidates(rec, rr, cfg, cands)
+    surface = getattr(plan, "surface_points", None)
+    if surface is not None and len(surface):
+        rec.log("world/planner/surface", rr.Points3D(surface, radii=cfg.cloud_radius_m))
+
+
 def _log_top_grasps(rec: Any, rr: Any, cfg: ViewerConfig, gripper: Any, grasps: Any) -> None:
     """Outlines of the best ``cfg.top_grasps`` grasps, coloured and labelled by score."""
     top = [grasps[k] for k in range(min(cfg.top_grasps, len(grasps)))]

@@ -21,6 +21,7 @@ seconds, ``MjData.time``). Entity paths:
 - ``world/planner/candidates/<class>``: candidates as arrows along the approach axis ending at
   P_G; ``kept`` coloured by score, the others by the rule that removed them (``width``,
   ``duplicate``, ``width``, ``support``, ``table``, ``collision``, ``sweep``).
+- ``world/planner/surface``: a planner's own surface (vgn and giga: the TSDF's zero crossings).
 - ``world/planner/top_grasps``: outlines of the best ``top_grasps`` grasps;
   ``world/planner/chosen_grasp``: the outline of the executed one (white).
 - ``plots/gripper_width``: finger opening over time, metres.
@@ -46,12 +47,13 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from hsqbench.viz.blueprint import episode_blueprint
 from hsqbench.viz.colors import camera_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
 from hsqbench.viz.gripper_outline import gripper_outline
 from hsqbench.viz.rerun_plan import (
     _best_scores,
-    _log_candidates,
+    _log_plan_geometry,
     _log_superquadrics,
     _log_top_grasps,
 )
@@ -61,6 +63,25 @@ TIMELINE = "sim_time"
 CHOSEN_COLOR = (255, 255, 255, 255)
 WORKSPACE_COLOR = (200, 200, 200, 255)
 CLOUD_COLOR = (230, 230, 230, 255)
+
+
+def _floor_centre(info: Any) -> NDArray[np.float64] | None:
+    """The middle of the workspace's floor (where the objects stand), or None."""
+    if not hasattr(info, "workspace_min"):
+        return None
+    lo, hi = np.asarray(info.workspace_min, float), np.asarray(info.workspace_max, float)
+    return np.array([*(0.5 * (lo[:2] + hi[:2])), lo[2]])
+
+
+def _layout(model: mujoco.MjModel, data: mujoco.MjData, info: Any) -> Any:
+    """The episode's default layout (:mod:`hsqbench.viz.blueprint`), its eye on the side of the
+    camera named first."""
+    cameras = sorted(getattr(info, "depth_cameras", ()), key=lambda c: camera_entity_name(c.name))
+    first = None
+    if cameras and hasattr(info, "workspace_min"):  # the settled scene's kinematics are current
+        first = data.cam_xpos[model.camera(cameras[0].name).id].copy()
+    names = [camera_entity_name(c.name) for c in cameras]
+    return episode_blueprint(names, first, _floor_centre(info))
 
 
 def camera_entity_name(name: str) -> str:
@@ -118,7 +139,8 @@ class RerunRecorder:
         self.config = config if config is not None else load_viewer_config()
         self.step_interval_s = float(self.config.step_interval_s)
         if gripper is None:
-            from hsqbench.planner.api import resolve_config, resolve_gripper
+            from hsqbench.planner.gripper import resolve_gripper
+            from hsqbench.planner.hsq.config import resolve_config
 
             gripper = resolve_gripper(resolve_config(None).grasp.gripper)
         self.gripper = gripper
@@ -168,30 +190,6 @@ class RerunRecorder:
             vertex_normals=mesh.normals,
         )
 
-    def _blueprint(self, camera_names: list[str]) -> Any:
-        import rerun.blueprint as rrb
-
-        depth_views = [
-            rrb.Spatial2DView(origin=f"world/cameras/{c}", name=f"{c} depth") for c in camera_names
-        ]
-        return rrb.Blueprint(
-            rrb.Horizontal(
-                rrb.Spatial3DView(
-                    origin="world",
-                    name="scene",
-                    contents=["+ world/**", "- world/**/collision_geoms"],
-                ),
-                rrb.Vertical(
-                    *depth_views,
-                    rrb.TextDocumentView(origin="outcome", name="outcome"),
-                    rrb.TextLogView(origin="events", name="events"),
-                    rrb.TimeSeriesView(origin="plots", name="gripper width (m)"),
-                ),
-                column_shares=[3, 2],
-            ),
-            collapse_panels=True,
-        )
-
     # ---- Recorder protocol ---------------------------------------------------------------------
     def on_scene(self, model: mujoco.MjModel, data: mujoco.MjData, info: Any) -> None:
         """Static geometry, the initial poses and a description of the scene."""
@@ -200,8 +198,7 @@ class RerunRecorder:
         kind, objects = getattr(info, "kind", "?"), list(getattr(info, "objects", []))
         seed = getattr(info, "seed", "?")
         self.rec.send_recording_name(f"{kind} {' '.join(objects)} seed {seed}")
-        cams = [camera_entity_name(c.name) for c in getattr(info, "depth_cameras", ())]
-        self.rec.send_blueprint(self._blueprint(cams))
+        self.rec.send_blueprint(_layout(model, data, info))
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.rec.log(
             "scene",
@@ -301,11 +298,9 @@ class RerunRecorder:
         rr, cfg = self._rr, self.config
         self._at_now()
         hidden = list(getattr(plan, "hidden_superquadrics", []) or [])
-        cands = getattr(plan, "candidates", None)
         best = _best_scores(plan, len(hidden))
         _log_superquadrics(self.rec, rr, cfg, hidden, best, self._cloud)
-        if cands is not None and len(cands):
-            _log_candidates(self.rec, rr, cfg, cands)
+        _log_plan_geometry(self.rec, rr, cfg, plan)
         grasps = plan.grasps
         _log_top_grasps(self.rec, rr, cfg, self.gripper, grasps)
         removed = ", ".join(f"{k} {v}" for k, v in getattr(plan, "removed_by", {}).items() if v)

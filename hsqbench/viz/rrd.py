@@ -6,6 +6,7 @@ tests. Reads with ``rerun.chunk.RrdReader`` (Rerun >= 0.41), which streams the f
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,6 +31,8 @@ class RecordingSummary:
         texts: entity path -> the latest text logged there (``TextDocument`` / ``TextLog``) on
             the timeline ``text_key`` of :func:`read_recording` (static text counts as earliest).
         n_chunks: number of chunks read.
+        camera_positions: ``world/cameras/<cam>`` -> its first logged position (metres).
+        floor_centre: the middle of the bottom of the ``world/workspace`` box, or None.
     """
 
     path: Path
@@ -41,6 +44,17 @@ class RecordingSummary:
     times: dict[str, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
     texts: dict[str, str] = field(default_factory=dict)
     n_chunks: int = 0
+    camera_positions: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    floor_centre: NDArray[np.float64] | None = None
+
+    @property
+    def camera_names(self) -> list[str]:
+        """The depth cameras' names (``left`` of ``world/cameras/left/depth``), sorted."""
+        return sorted(
+            p.split("/")[2]
+            for p in self.entity_paths
+            if re.fullmatch(r"world/cameras/[^/]+/depth", p)
+        )
 
     def timeline(self, name: str) -> NDArray[np.float64]:
         """All distinct times on timeline ``name`` over every entity, sorted (empty if absent)."""
@@ -57,6 +71,37 @@ def _index_values(column, arrow_type) -> NDArray[np.float64]:
     if pa.types.is_timestamp(arrow_type):
         return column.cast(pa.int64()).to_numpy(zero_copy_only=False).astype(np.float64) * 1e-9
     return column.to_numpy(zero_copy_only=False).astype(np.float64)
+
+
+def _read_texts(
+    batch, timelines: list[str], text_key: str, entity: str, latest: dict[str, tuple[float, str]]
+) -> None:
+    """Keep in ``latest`` the text of ``entity`` logged last on ``text_key`` (static: earliest)."""
+    for text_col in ("TextDocument:text", "TextLog:text"):
+        if text_col not in batch.schema.names:
+            continue
+        when = (
+            _index_values(batch.column(text_key), batch.schema.field(text_key).type)
+            if text_key in timelines
+            else np.full(batch.num_rows, -np.inf)
+        )
+        for t, value in zip(when, batch.column(text_col).to_pylist(), strict=True):
+            text = value[-1] if isinstance(value, list) and value else value
+            if text and t >= latest.get(entity, (-np.inf, ""))[0]:
+                latest[entity] = (float(t), str(text))
+
+
+def _read_geometry(summary: RecordingSummary, entity: str, batch) -> None:
+    """Note the first camera positions and the workspace box (for the default view)."""
+    names = batch.schema.names
+    if re.fullmatch(r"world/cameras/[^/]+", entity) and "Transform3D:translation" in names:
+        if entity not in summary.camera_positions:
+            first = batch.column("Transform3D:translation").to_pylist()[0]
+            summary.camera_positions[entity] = np.asarray(first, dtype=float).reshape(3)
+    elif entity == "world/workspace" and {"Boxes3D:centers", "Boxes3D:half_sizes"} <= set(names):
+        centre = np.asarray(batch.column("Boxes3D:centers").to_pylist()[0], float).reshape(3)
+        half = np.asarray(batch.column("Boxes3D:half_sizes").to_pylist()[0], float).reshape(3)
+        summary.floor_centre = centre - np.array([0.0, 0.0, half[2]])
 
 
 def read_recording(path: str | Path, text_key: str = "sim_time") -> RecordingSummary:
@@ -105,22 +150,12 @@ def read_recording(path: str | Path, text_key: str = "sim_time") -> RecordingSum
             batch = chunk.to_record_batch()
             if chunk.is_static:
                 static.add(entity)
+            _read_geometry(summary, entity, batch)
             for name in chunk.timeline_names:
                 column = batch.column(name)
                 per = times.setdefault(name, {}).setdefault(entity, [])
                 per.append(_index_values(column, batch.schema.field(name).type))
-            for text_col in ("TextDocument:text", "TextLog:text"):
-                if text_col not in batch.schema.names:
-                    continue
-                when = (
-                    _index_values(batch.column(text_key), batch.schema.field(text_key).type)
-                    if text_key in chunk.timeline_names
-                    else np.full(batch.num_rows, -np.inf)
-                )
-                for t, value in zip(when, batch.column(text_col).to_pylist(), strict=True):
-                    text = value[-1] if isinstance(value, list) and value else value
-                    if text and t >= latest.get(entity, (-np.inf, ""))[0]:
-                        latest[entity] = (float(t), str(text))
+            _read_texts(batch, chunk.timeline_names, text_key, entity, latest)
     except Exception as exc:
         raise ValueError(f"Rerun cannot read {p} (a truncated or corrupt file?): {exc}") from None
     summary.texts = {e: text for e, (_, text) in latest.items()}

@@ -18,8 +18,8 @@ their published descriptions):
 
 Input and elimination are the hsq planner's own: isolated points are removed first
 (``cleaning:`` of the planner config, :func:`hsqbench.planner.cleaning.clean_cloud`), and
-:func:`hsqbench.planner.elimination.eliminate` runs on the same
-:class:`~hsqbench.planner.candidates.CandidateSet`: all of its rules (width, support, table,
+:func:`hsqbench.planner.hsq.stage_two.elimination.eliminate` runs on the same
+:class:`~hsqbench.planner.hsq.stage_two.candidates.CandidateSet`: all of its rules (width, support, table,
 collision, sweep, and any added later) with the same gripper, settings and camera positions (a
 contact no camera sees needs no support), so the planners differ only in where the closing
 lines come from and how they are scored.
@@ -56,12 +56,12 @@ from hsqbench.planner.baselines.config import (
 )
 from hsqbench.planner.baselines.normals import estimate_normals, orient_outward
 from hsqbench.planner.baselines.planner import BaselinePlanner
-from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
-from hsqbench.planner.config import GraspConfig
 from hsqbench.planner.downsample import voxel_downsample
-from hsqbench.planner.elimination import eliminate
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.synthesis import roll_angles
+from hsqbench.planner.hsq.config import GraspConfig
+from hsqbench.planner.hsq.stage_two.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
+from hsqbench.planner.hsq.stage_two.elimination import eliminate
+from hsqbench.planner.hsq.stage_two.synthesis import roll_angles
 
 Array = NDArray[np.float64]
 

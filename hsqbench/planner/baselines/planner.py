@@ -6,12 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import ClassVar
 
-from hsqbench.planner.api import resolve_config, resolve_gripper
 from hsqbench.planner.base import CleanInput, PlannerBase, clean_input
 from hsqbench.planner.baselines.config import BaselinesConfig, resolve_baselines_config
 from hsqbench.planner.cleaning import CleaningConfig
-from hsqbench.planner.config import PlannerConfig
-from hsqbench.planner.gripper import GripperModel
+from hsqbench.planner.gripper import GripperModel, resolve_gripper
+from hsqbench.planner.hsq.config import PlannerConfig, resolve_config
 
 __all__ = ["BaselinePlanner", "CleanInput", "clean_input"]
 

@@ -1,11 +1,11 @@
 """The ``single-sq`` baseline: one superquadric for the whole object, grasps along its axes.
 
 This is the single-superquadric grasping that the paper improves on (Vezzani et al. 2017,
-Makhal et al. 2018): stage one is :func:`~hsqbench.planner.recovery.fit_superquadric` on the
+Makhal et al. 2018): stage one is :func:`~hsqbench.planner.hsq.stage_one.recovery.fit_superquadric` on the
 whole (downsampled) cloud with the low, single-object outlier weight
 (``recovery.outlier_weight`` of the planner config), instead of the K + 1 hidden superquadrics;
 stage two is the hsq planner's own synthesis, elimination and scoring
-(:func:`~hsqbench.planner.api.plan_from_hidden`) on that one superquadric, with its inliers
+(:func:`~hsqbench.planner.hsq.stage_two.plan.plan_from_hidden`) on that one superquadric, with its inliers
 (posterior > ``recovery.inlier_threshold``) and the paper's alpha and beta on them. As for hsq,
 isolated points are removed first (``cleaning:`` of the planner config) and the cameras, when
 known, waive support at contacts none of them sees.
@@ -16,7 +16,7 @@ and its alpha is large, which is the failure the paper's hidden superquadrics ad
 
 In packed scenes the method needs one cloud per object, as the single-superquadric papers
 segment theirs: the cloud is split into Euclidean clusters
-(:func:`~hsqbench.planner.clusters.object_clusters` with the planner config's ``recovery:``
+(:func:`~hsqbench.planner.hsq.stage_one.clusters.object_clusters` with the planner config's ``recovery:``
 settings, as hsq's stage one; objects are placed apart) and each cluster gets its own
 superquadric. Isolated clouds are one object.
 """
@@ -30,14 +30,19 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hsqbench.planner.api import PlanningContext, PlanResult, plan_in_context
+from hsqbench.planner.api import PlanningContext, PlanResult
 from hsqbench.planner.base import CleanInput
 from hsqbench.planner.baselines.config import BaselinesConfig
 from hsqbench.planner.baselines.planner import BaselinePlanner
-from hsqbench.planner.clusters import object_clusters
-from hsqbench.planner.config import RecoveryConfig
 from hsqbench.planner.gripper import GripperModel
-from hsqbench.planner.recovery import HiddenSuperquadric, fit_measures, fit_superquadric
+from hsqbench.planner.hsq.config import RecoveryConfig
+from hsqbench.planner.hsq.stage_one.clusters import object_clusters
+from hsqbench.planner.hsq.stage_one.recovery import (
+    HiddenSuperquadric,
+    fit_measures,
+    fit_superquadric,
+)
+from hsqbench.planner.hsq.stage_two.plan import plan_in_context
 
 
 def _one_superquadric(
@@ -72,12 +77,12 @@ def plan_single_sq(
         config: a :class:`BaselinesConfig`, a config name or a YAML path; None: baselines.yaml
             (whose ``planner`` entry names the stage-one and stage-two settings).
         packed: a packed scene: ``h_delta`` left out, and one superquadric per object
-            (:func:`~hsqbench.planner.clusters.object_clusters`).
+            (:func:`~hsqbench.planner.hsq.stage_one.clusters.object_clusters`).
         support_plane: the table ``(a, b, c, d)``, unit normal toward the free side.
         seed: passed to stage two (the fit itself is deterministic).
         gripper: default: the gripper of the planner config's ``grasp:`` section.
         camera_positions: (C, 3) camera centres, metres, if known: contacts no camera can see
-            then need no support, as for hsq (:func:`~hsqbench.planner.api.plan_from_hidden`).
+            then need no support, as for hsq (:func:`~hsqbench.planner.hsq.stage_two.plan.plan_from_hidden`).
 
     Raises:
         ValueError: a cloud :func:`fit_superquadric` refuses (empty, NaN, too few points,

@@ -23,7 +23,7 @@ A learned 6-DoF grasp detector for the Franka hand, run through the PyTorch port
    the baselines, same gripper and settings) run on them too.
 
 Each grasp is a closing line with one roll (its own approach), so the result carries a
-:class:`~hsqbench.planner.candidates.CandidateSet` like the other planners (viewer, reports).
+:class:`~hsqbench.planner.hsq.stage_two.candidates.CandidateSet` like the other planners (viewer, reports).
 """
 
 from __future__ import annotations
@@ -35,19 +35,18 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hsqbench.planner.api import (
-    PlanningContext,
-    PlanResult,
-    resolve_config,
-    resolve_gripper,
-    validate_cameras,
-    validate_plane,
-)
+from hsqbench.planner.api import PlanningContext, PlanResult, validate_cameras, validate_plane
 from hsqbench.planner.base import CleanInput, PlannerBase
-from hsqbench.planner.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
 from hsqbench.planner.cleaning import CleaningConfig
 from hsqbench.planner.downsample import voxel_downsample
-from hsqbench.planner.elimination import RULE_DESCRIPTIONS, approach_openings, eliminate
+from hsqbench.planner.gripper import resolve_gripper
+from hsqbench.planner.hsq.config import resolve_config
+from hsqbench.planner.hsq.stage_two.candidates import REJECTION_REASONS, CandidateSet, ClosingLines
+from hsqbench.planner.hsq.stage_two.elimination import (
+    RULE_DESCRIPTIONS,
+    approach_openings,
+    eliminate,
+)
 from hsqbench.planner.learned import frames, network, width
 from hsqbench.planner.learned.config import (
     ContactGraspNetConfig,

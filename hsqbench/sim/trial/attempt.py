@@ -13,6 +13,7 @@ import numpy as np
 from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.sim.motion import SimUnstable
 from hsqbench.sim.outcome import Attempt, Outcome
+from hsqbench.sim.recorded_pose import pose7
 from hsqbench.sim.trial.config import TrialConfig
 from hsqbench.sim.trial.env import TrialEnv
 from hsqbench.sim.trial.execution import ExecutionResult, execute_grasp
@@ -60,9 +61,9 @@ class MotionPlan:
 
 
 def resolve_planner(planner: Any, config: TrialConfig) -> Any:
-    """A planner object from a name (``hsqbench.planner.get_planner``) or the object itself."""
+    """A planner object from a name (``hsqbench.planner.registry.get_planner``) or the object itself."""
     if isinstance(planner, str):
-        from hsqbench.planner import get_planner
+        from hsqbench.planner.registry import get_planner
 
         return get_planner(planner, config.planners.for_planner(planner))
     if not hasattr(planner, "plan"):
@@ -102,6 +103,8 @@ def _plan(env: TrialEnv, planner: Any, points: Any, obs: Any, truth: Any, packed
         camera_positions=np.asarray(obs.camera_positions),
         workspace_bounds=(np.asarray(env.info.workspace_min), np.asarray(env.info.workspace_max)),
         truth=truth if getattr(planner, "privileged", False) else None,
+        scene=env.info.kind,
+        depth_views=getattr(obs, "cameras", None),
     )
     return planner.plan(points, context)
 
@@ -163,10 +166,13 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
     planning_s = time.perf_counter() - t0
     if rec.enabled:
         rec.on_plan(plan)
+    n_top = min(len(plan.grasps), cfg.recorded_scores)
     common = {
         "n_grasps": len(plan.grasps),
         "perception_s": perception_s,
         "planning_s": planning_s,
+        "top_scores": tuple(float(plan.grasps[i].score) for i in range(n_top)),
+        "planner_stages_s": {k: float(v) for k, v in plan.timings.items()},
         **presented,
     }
     if not len(plan.grasps):
@@ -198,6 +204,9 @@ def _execute(
             factors=dict(top.factors),
             width_m=float(top.width),
             execution_s=trace.ik_s,
+            grasp_pose=pose7(top.position, top.rotation),
+            motion_planning_s=trace.ik_s,
+            ranks_tried=trace.ranks_tried,
             detail=reasons[0] if len(reasons) == 1 else f"{len(reasons)} grasps: {reasons[0]}",
             **common,
             **_pose_of(env, presented, intended),
@@ -225,6 +234,11 @@ def _execute(
         factors={k: float(v) for k, v in grasp.factors.items()},
         width_m=float(grasp.width),
         execution_s=time.perf_counter() - t0,
+        grasp_pose=pose7(motion.grasp_pose.position, motion.grasp_pose.rotation),
+        grasp_flipped=motion.flipped,
+        motion_planning_s=trace.ik_s,
+        sim_time_s=res.sim_time_s,
+        ranks_tried=trace.ranks_tried,
         detail=res.detail,
         **common,
     )

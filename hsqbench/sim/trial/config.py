@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 from hsqbench.assets.config import AssetsConfig, load_assets_config
-from hsqbench.config import ConfigError, expand_names, from_dict, load_tree
+from hsqbench.config import expand_names, from_dict, load_tree
+from hsqbench.errors import ConfigError
 from hsqbench.planner.configs import PlannerConfigs
 from hsqbench.planner.oracle import OracleConfig
 from hsqbench.sim.ik import IKConfig
@@ -140,6 +141,8 @@ class TrialConfig:
         assets: the object library's build settings (hulls, inertia: they change the physics).
         max_ranks: grasps tried in score order before an attempt is ``unreachable``.
         min_cloud_points: fewer perceived points than this: nothing to grasp.
+        recorded_scores: how many of the planner's best scores each attempt records
+            (``Attempt.top_scores``, the ``top_scores`` column).
         ordering, execution, ik, motion, judge: see their classes.
         packed, pile: the stop rules of packed and pile rounds (:mod:`hsqbench.sim.stop_rule`).
     """
@@ -156,6 +159,7 @@ class TrialConfig:
     assets: AssetsConfig = field(default_factory=load_assets_config)
     max_ranks: int = 48
     min_cloud_points: int = 30
+    recorded_scores: int = 5
     ordering: OrderingConfig = field(default_factory=OrderingConfig)
     execution: ExecutionConfig = field(default_factory=ExecutionConfig)
     ik: IKConfig = field(default_factory=IKConfig)
@@ -167,6 +171,8 @@ class TrialConfig:
     def __post_init__(self) -> None:
         if self.max_ranks < 1:
             raise ValueError(f"max_ranks must be >= 1, got {self.max_ranks}")
+        if self.recorded_scores < 0:
+            raise ValueError(f"recorded_scores must be >= 0, got {self.recorded_scores}")
 
 
 def load_trial_config(
@@ -183,10 +189,13 @@ def load_trial_config(
     return load_tree(TrialConfig, path, overrides)
 
 
-def trial_config_from_record(data: dict[str, Any], where: str = "run.json") -> TrialConfig:
+def trial_config_from_record(
+    data: dict[str, Any], where: str = "run.json", overrides: dict[str, Any] | None = None
+) -> TrialConfig:
     """The config tree a run recorded (``backend.trial_config`` of its ``run.json``), for a
-    replay. Runs made before the tree recorded names (``scene: scene``: loaded from today's
-    files) and ``planner_config: null`` (each planner's own config: today's ``planners:``)."""
+    replay, with ``overrides`` applied as :func:`load_trial_config` applies them. Runs made
+    before the tree recorded names (``scene: scene``: loaded from today's files) and
+    ``planner_config: null`` (each planner's own config: today's ``planners:``)."""
     data = dict(data)
     old = data.pop("planner_config", None)
     if old is not None:
@@ -194,7 +203,12 @@ def trial_config_from_record(data: dict[str, Any], where: str = "run.json") -> T
             f"{where}: planner_config {old!r} was handed to every planner (a run made before "
             "the per-planner map); replay it with a trial config whose planners: names it"
         )
-    return from_dict(TrialConfig, expand_names(TrialConfig, data), where)
+    tree = expand_names(TrialConfig, data)
+    if overrides:
+        from hsqbench.overrides import apply_overrides
+
+        tree = apply_overrides(tree, overrides, TrialConfig)
+    return from_dict(TrialConfig, tree, where)
 
 
 def named_inputs(config: TrialConfig) -> dict[str, Any]:
@@ -202,7 +216,8 @@ def named_inputs(config: TrialConfig) -> dict[str, Any]:
     planner configs that the baselines and the oracle read, the grippers, and the scene's world
     files. Hashed with the tree, so editing any of them changes a run's config hash."""
     from hsqbench.config import load_config_data, to_dict
-    from hsqbench.planner.api import resolve_config, resolve_gripper
+    from hsqbench.planner.gripper import resolve_gripper
+    from hsqbench.planner.hsq.config import resolve_config
     from hsqbench.sim.scene import world_files
 
     oracles = [config.planners.oracle, *([config.graspability] if config.graspability else [])]

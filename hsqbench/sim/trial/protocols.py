@@ -83,7 +83,7 @@ def run_isolated_trial(
     Args:
         object: an object name (``hsqbench.assets.library``) or an object.
         seed: the only source of randomness.
-        planner: a planner name (``hsqbench.planner.planner_names()``) or a ``Planner``.
+        planner: a planner name (``hsqbench.planner.registry.planner_names()``) or a ``Planner``.
         config: default ``configs/trial.yaml``.
         recorder: episode recorder (default: none).
         traces: if given, the attempt's :class:`AttemptTrace` is appended to it.

@@ -1,0 +1,60 @@
+"""VGN/GIGA-rule clutter metrics recomputed from a run's rounds and attempts."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+
+from hsqbench.experiment.clutter import clutter_table, render_clutter, vgn_round
+from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
+from hsqbench.experiment.report import load_run
+from hsqbench.experiment.runner import run_benchmark
+from hsqbench.experiment.stats import wilson_interval
+from tests.fake_backend import FakeBackend
+
+
+@pytest.mark.parametrize(
+    ("outcomes", "expected"),
+    [
+        (["success", "dropped", "success"], (2, 3, False)),  # no cut: their rule ends it too
+        (["success", "no_grasp_found", "success", "success"], (1, 1, True)),
+        (["no_grasp_found", "success"], (0, 0, True)),  # round over before any grasp
+        ([], (0, 0, False)),
+    ],
+)
+def test_a_round_ends_before_its_first_attempt_without_a_grasp(outcomes, expected) -> None:
+    assert vgn_round(outcomes, [o == "success" for o in outcomes]) == expected
+
+
+def test_run_totals_follow_the_cut_rounds(tmp_path: Path) -> None:
+    config = ExperimentConfig(
+        planners=("hsq", "antipodal"),
+        isolated=IsolatedConfig(enabled=False),
+        packed=PackedConfig(
+            objects=("mug", "bowl", "pear", "banana", "apple"), rounds=12, objects_per_round=4
+        ),
+    )
+    backend = FakeBackend(success={"antipodal": 0.5})
+    run_dir = tmp_path / "run"
+    run_benchmark(config, run_dir, backend=backend, progress=False)
+    table = clutter_table(load_run(run_dir)).set_index("planner")
+    with open(run_dir / "attempts.csv") as f:
+        rows = [r for r in csv.DictReader(f) if r["planner"] == "antipodal"]
+    by_round: dict[str, list[str]] = {}
+    for r in sorted(rows, key=lambda r: (r["trial_key"], int(r["attempt_index"]))):
+        by_round.setdefault(r["trial_key"], []).append(r["outcome"])
+    k = n = cut = 0
+    for outcomes in by_round.values():
+        stop = outcomes.index("no_grasp_found") if "no_grasp_found" in outcomes else len(outcomes)
+        k, n, cut = k + outcomes[:stop].count("success"), n + stop, cut + (stop < len(outcomes))
+    row = table.loc["antipodal"]
+    assert (row["vgn_successes"], row["vgn_attempts"], row["rounds_cut"]) == (k, n, cut)
+    assert cut > 0  # the fake backend's failures include "no grasp found"
+    assert row["declutter_percent"] == pytest.approx(100 * k / (12 * 4))
+    low, _ = wilson_interval(k, n)
+    assert row["vgn_gsr_low_percent"] == pytest.approx(100 * low)
+    assert row["declutter_percent"] <= row["our_cr_percent"]
+    lines = render_clutter(load_run(run_dir), table.reset_index())
+    assert any(x.startswith("| packed | antipodal |") for x in lines)
