@@ -23,7 +23,7 @@ from hsqbench.planner.gripper import GripperModel, resolve_gripper
 from hsqbench.planner.hsq.additions import AdditionsConfig
 from hsqbench.planner.hsq.config import PlannerConfig, resolve_config
 from hsqbench.planner.hsq.stage_one.clusters import object_clusters
-from hsqbench.planner.hsq.stage_one.recovery import recover_hidden_superquadrics
+from hsqbench.planner.hsq.stage_one.recovery import HiddenRecovery
 from hsqbench.planner.hsq.stage_two.plan import plan_in_context
 
 
@@ -118,10 +118,12 @@ class HSQPlanner(PlannerBase):
         if not groups:
             groups = [np.arange(cloud.shape[0])]
         recovery_s = 0.0
+        recoveries: list[HiddenRecovery] = []  # per group, made once: the draws share seed 0
         for draw in range(rcfg.no_grasp_redraws + 1):
             draw_context = dataclasses.replace(context, seed=redraw_seed(context.seed, draw))
             start = time.perf_counter()
-            hidden = self._recover(cloud, groups, clean, draw_context.seed)
+            recoveries = recoveries or [HiddenRecovery(cloud[g], rcfg) for g in groups]
+            hidden = self._recover(recoveries, groups, clean, draw_context.seed)
             recovery_s += time.perf_counter() - start
             result = plan_in_context(cloud, hidden, self.config.grasp, self.gripper, draw_context)
             if result.grasps:
@@ -132,15 +134,18 @@ class HSQPlanner(PlannerBase):
         return result
 
     def _recover(
-        self, cloud: NDArray, groups: list[NDArray], clean: CleanInput, seed: int | None
+        self,
+        recoveries: list[HiddenRecovery],
+        groups: list[NDArray],
+        clean: CleanInput,
+        seed: int | None,
     ) -> list[Any]:
-        """Stage one on each group of ``cloud``; inliers index the caller's cloud."""
-        rcfg = self.config.recovery
+        """Stage one's draw ``seed`` on each group; inliers index the caller's cloud."""
         # A loop over objects (at most a handful), each recovery vectorised over its points.
         hidden = [
             dataclasses.replace(h, inliers=group[h.inliers])
-            for group in groups
-            for h in recover_hidden_superquadrics(cloud[group], rcfg, seed=seed)
+            for group, recovery in zip(groups, recoveries, strict=True)
+            for h in recovery.draw(seed)
         ]
         return [dataclasses.replace(h, inliers=clean.input_indices(h.inliers)) for h in hidden]
 

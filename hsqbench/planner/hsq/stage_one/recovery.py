@@ -328,6 +328,8 @@ def recover_hidden_superquadrics(
     KD-tree of all its points per result, and weigh dense regions more. A fit with fewer than
     ``N_PARAMS`` inliers is left out as well.
 
+    Several draws on one cloud: :class:`HiddenRecovery` (seed 0 fitted once for all).
+
     Args:
         points: (N, 3) cloud, metres.
         config: recovery settings; default :class:`RecoveryConfig`.
@@ -336,22 +338,48 @@ def recover_hidden_superquadrics(
     Raises:
         ValueError: as :func:`fit_superquadric`.
     """
-    cfg = config or RecoveryConfig()
-    cloud = _validate(points)
-    down = _downsample(cloud, cfg)
-    problem = _problem(down, cfg)
-    sensor = voxel_downsample(cloud, cfg.k_count_voxel_m)
-    k = paper_k(len(sensor.points))
-    n_parts = min(max(1, round(cfg.kmeans_parts_factor * k)), cfg.max_parts)
-    labels = kmeans_labels(down.points, n_parts, 0 if seed is None else seed, cfg.kmeans_n_init)
-    parts = [down.points] + [down.points[labels == i] for i in range(int(labels.max()) + 1)]
-    done: list[NDArray[np.bool_]] = []
-    results = []
-    for index, part in enumerate(parts):
-        init = inertia_ellipsoid(part, cfg.scale_min_m, problem.scale_max_m)
+    return HiddenRecovery(points, config).draw(seed)
+
+
+class HiddenRecovery:
+    """:func:`recover_hidden_superquadrics` on one cloud for any number of K-means draws: what
+    no draw changes (downsampling, K, and seed 0, the whole cloud's fit) is done once, in the
+    constructor (ValueError as :func:`fit_superquadric`); :meth:`draw` fits one split's parts."""
+
+    def __init__(self, points: ArrayLike, config: RecoveryConfig | None = None) -> None:
+        self.cfg = cfg = config or RecoveryConfig()
+        cloud = _validate(points)
+        self.down = _downsample(cloud, cfg)
+        self.problem = _problem(self.down, cfg)
+        self.sensor = voxel_downsample(cloud, cfg.k_count_voxel_m)
+        k = paper_k(len(self.sensor.points))
+        self.n_parts = min(max(1, round(cfg.kmeans_parts_factor * k)), cfg.max_parts)
+        self.done: list[NDArray[np.bool_]] = []
+        self.results: list[HiddenSuperquadric] = []
+        self._add(0, self.down.points, self.done, self.results)
+
+    def draw(self, seed: int | None = None) -> list[HiddenSuperquadric]:
+        """The result of seed 0 and of the parts of K-means seeded by ``seed`` (None: 0)."""
+        cfg, points = self.cfg, self.down.points
+        labels = kmeans_labels(points, self.n_parts, 0 if seed is None else seed, cfg.kmeans_n_init)
+        done, results = list(self.done), list(self.results)
+        for i in range(int(labels.max()) + 1):
+            self._add(i + 1, points[labels == i], done, results)
+        return results
+
+    def _add(
+        self,
+        index: int,
+        part: Array,
+        done: list[NDArray[np.bool_]],
+        results: list[HiddenSuperquadric],
+    ) -> None:
+        """Fit seed ``index`` (started on ``part``); append it unless stopped or too small."""
+        cfg, down, sensor = self.cfg, self.down, self.sensor
+        init = inertia_ellipsoid(part, cfg.scale_min_m, self.problem.scale_max_m)
         stop = _duplicate_test(done, cfg.inlier_threshold, cfg.duplicate_iou)
         res = _fit(
-            problem,
+            self.problem,
             init,
             part,
             cfg.hidden_outlier_weight,
@@ -363,12 +391,10 @@ def recover_hidden_superquadrics(
         inlier_voxels = res.posterior > cfg.inlier_threshold
         inliers = np.flatnonzero(inlier_voxels[down.inverse])
         if res.stopped or inliers.size < N_PARAMS:
-            continue
+            return
         done.append(inlier_voxels)
         sq = res.state.to_superquadric()
         sensed = np.zeros(len(sensor.points), dtype=bool)  # the sensor voxels of Y, in order
         sensed[sensor.inverse[inliers]] = True
-        y = sensor.points[sensed]
-        alpha, beta = fit_measures(y, sq, cfg)
+        alpha, beta = fit_measures(sensor.points[sensed], sq, cfg)
         results.append(HiddenSuperquadric(sq, inliers, alpha, beta, index, res.sigma_m, res.cost))
-    return results

@@ -14,6 +14,7 @@ from hsqbench.planner.downsample import voxel_downsample
 from hsqbench.planner.hsq.config import RecoveryConfig, load_planner_config
 from hsqbench.planner.hsq.stage_one.recovery import (
     FitResult,
+    HiddenRecovery,
     HiddenSuperquadric,
     fit_superquadric,
     recover_hidden_superquadrics,
@@ -181,6 +182,26 @@ def test_same_seed_same_result() -> None:
         np.testing.assert_array_equal(x.superquadric.to_vector(), y.superquadric.to_vector())
         np.testing.assert_array_equal(x.inliers, y.inliers)
         assert (x.alpha, x.beta, x.seed) == (y.alpha, y.beta, y.seed)
+
+
+def _same_results(a: list[HiddenSuperquadric], b: list[HiddenSuperquadric]) -> None:
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x.superquadric.to_vector(), y.superquadric.to_vector())
+        np.testing.assert_array_equal(x.inliers, y.inliers)
+        assert (x.alpha, x.beta, x.seed, x.cost) == (y.alpha, y.beta, y.seed, y.cost)
+
+
+def test_draws_of_one_recovery_do_not_leak_into_each_other() -> None:
+    """The planner's redraws share seed 0's fit; each draw is still that of a fresh cloud."""
+    rng = np.random.default_rng(6)
+    pc = union_cloud(mug_with_handle(random_rotation(rng)), 0.002, rng)
+    cloud = pc.points + rng.normal(scale=0.001, size=pc.points.shape)
+    shared = HiddenRecovery(cloud)
+    first, other, again = shared.draw(3), shared.draw(4), shared.draw(3)
+    _same_results(first, again)
+    _same_results(other, HiddenRecovery(cloud).draw(4))
+    assert first[0].seed == other[0].seed == 0 and len(first) > 1
 
 
 def test_no_two_results_are_duplicates() -> None:
