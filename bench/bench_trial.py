@@ -103,12 +103,10 @@ class Runner:
 
     def __init__(self, jobs: int = 1) -> None:
         from hsqbench.experiment.executor import make_executor
-        from hsqbench.experiment.results import ResultStore
 
         self.executor = make_executor("local", jobs)
         self.backends: dict[str, object] = {}
-        self.store = ResultStore(tempfile.mkdtemp(prefix="bench-trial-rows-"))
-        self.store.prepare()
+        self.rows = tempfile.mkdtemp(prefix="bench-trial-rows-")
         self.runs = 0
 
     def run(self, request: dict) -> dict:
@@ -121,10 +119,14 @@ class Runner:
         specs = [TrialSpec(e, p, b, i, tuple(o), s) for e, p, b, i, o, s in request["specs"]]
         # As a benchmark does before its trials: build (or load) the objects; not timed.
         backend.prepare(tuple(dict.fromkeys(o for s in specs for o in s.objects)), 1, False)
+        from hsqbench.experiment.results import ResultStore
+
+        store = ResultStore(Path(self.rows) / f"request{self.runs}")
+        store.prepare()
         trials = []
         w0, c0 = time.perf_counter(), time.process_time()
         for run in self.executor.run(backend, specs):
-            self.store.append(run, f"bench{self.runs}", "bench")
+            store.append(run, "bench", "bench")
             trials.append(_trial_record(run))
         self.runs += 1
         wall, cpu = time.perf_counter() - w0, time.process_time() - c0
@@ -187,13 +189,18 @@ def jobs_compare(groups: list[dict], planners: list[str], rounds: int = 2) -> No
     """Wall seconds per trial of all presentations run with --jobs 1 and --jobs 2 in turn."""
     runners = {1: Runner(1), 2: Runner(2)}
     runners[1].run(warmup_group(planners[0]))
+    # One executor call per trial config, as a benchmark makes one for all its trials.
+    batches: dict[str, dict] = {}
+    for g in groups:
+        batch = batches.setdefault(g["trial_config"], {**g, "specs": []})
+        batch["specs"] = batch["specs"] + g["specs"]
     walls: dict[int, list[float]] = {1: [], 2: []}
     n = sum(len(g["specs"]) for g in groups)
     for r in range(rounds):
         for jobs in (1, 2) if r % 2 == 0 else (2, 1):
             t0 = time.perf_counter()
-            for g in groups:
-                runners[jobs].run(g)
+            for batch in batches.values():
+                runners[jobs].run(batch)
             walls[jobs].append((time.perf_counter() - t0) / n)
             print(f"--jobs {jobs}: {walls[jobs][-1]:.2f} s wall per trial", flush=True)
     j1, j2 = np.median(walls[1]), np.median(walls[2])
