@@ -142,7 +142,14 @@ def _trial_record(run) -> dict:
     for f in ("objects_cleared", "objects_lost", "objects_graspable"):
         if hasattr(result, f):
             outcomes.append([f, repr(getattr(result, f))])
-    return {"key": run.spec.key, "wall_s": run.wall_s, "error": run.error, "outcomes": outcomes}
+    summary = " ".join(a.outcome.value for a in attempts) or f"error: {run.error}"
+    return {
+        "key": run.spec.key,
+        "wall_s": run.wall_s,
+        "error": run.error,
+        "outcomes": outcomes,
+        "summary": summary,
+    }
 
 
 def worker() -> int:
@@ -174,10 +181,9 @@ def breakdown(groups: list[dict], planners: list[str]) -> None:
         reply = runner.run(g)
         n = len(g["specs"])
         trials += n
-        outs = [t["outcomes"][0][0] if t["outcomes"] else t["error"] for t in reply["trials"]]
         print(
             f"{g['name']:34s} {n:6d} {reply['wall_s'] / n:7.2f} {reply['cpu_s'] / n:7.2f}  "
-            + ", ".join(str(o).strip("<>'") for o in outs),
+            + ", ".join(t["summary"] for t in reply["trials"]),
             flush=True,
         )
     timing.uninstall()
