@@ -24,7 +24,7 @@ Run with ``nice`` on a shared machine and report its load (``uptime``); the pape
 and the unseen ones use their protocols' trial configs (``trial`` / ``trial_resting``).
 
     .venv/bin/python bench/bench_trial.py [--paper 3] [--unseen 3] [--packed 0]
-        [--poses 1] [--planners hsq antipodal] [--compare REF | --jobs-compare]
+        [--poses 1] [--first-pose 0] [--planners hsq antipodal] [--compare REF | --jobs-compare]
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ def build_groups(args: argparse.Namespace) -> list[dict]:
             continue
         cfg = load_experiment_config(config_name)
         for obj in _spread(cfg.isolated.objects, n):
-            for index in range(args.poses):
+            for index in range(args.first_pose, args.first_pose + args.poses):
                 seed = derive_seed(0, "isolated", obj, index)
                 specs = [["isolated", p, 0, index, [obj], seed] for p in args.planners]
                 groups.append(_group(f"{obj}/{index}", f"{kind} isolated", cfg, specs))
@@ -219,6 +219,7 @@ def main() -> int:
     parser.add_argument("--unseen", type=int, default=3, help="objects of the unseen protocol")
     parser.add_argument("--packed", type=int, default=0, help="packed rounds (paper protocol)")
     parser.add_argument("--poses", type=int, default=1, help="pose indices per object")
+    parser.add_argument("--first-pose", type=int, default=0, help="the first pose index")
     parser.add_argument("--planners", nargs="+", default=["hsq", "antipodal"])
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--compare", metavar="REF", help="also run commit REF and print ratios")
