@@ -67,8 +67,11 @@ def _mp_context() -> multiprocessing.context.BaseContext:
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
     ctx = multiprocessing.get_context("forkserver")
-    # Workers fork from a server that has already imported the trial code: cheap fresh pools.
-    ctx.set_forkserver_preload(["hsqbench.experiment.backend"])
+    # Workers fork from a server that has already imported the trial code and the planners'
+    # heavy imports (scikit-learn, SciPy): cheap fresh pools.
+    ctx.set_forkserver_preload(
+        ["hsqbench.experiment.backend", "hsqbench.sim.trial", "hsqbench.planner.recovery"]
+    )
     return ctx
 
 

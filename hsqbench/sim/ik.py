@@ -346,9 +346,10 @@ class ArmIK:
                 self.lower + margin, self.upper - margin, size=(self.config.seed_library_size, 7)
             )
             pos, rot = np.empty((len(qs), 3)), np.empty((len(qs), 3, 3))
-            for i, q in enumerate(qs):
-                pose = self.forward(q)
-                pos[i], rot[i] = pose.position, pose.rotation
+            sid = p.tcp_site_id
+            for i, q in enumerate(qs):  # forward() without a validated Pose per posture
+                self.configuration.update(self._full_q(q))
+                pos[i], rot[i] = self.data.site_xpos[sid], self.data.site_xmat[sid].reshape(3, 3)
             keep = pos[:, 2] > 0.0
             _LIBRARIES[key] = (qs[keep], pos[keep], rot[keep])
         return _LIBRARIES[key]
