@@ -143,7 +143,9 @@ def make_results(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="make results", description=__doc__.split("\n\n")[0].strip("`")
+        prog="make results",
+        description="(Re)make the canonical runs behind the README's tables and plots "
+        "(configs/canonical.yaml), resuming what is there.",
     )
     parser.add_argument("--list", default=CANONICAL, help="the canonical list (configs/ name)")
     parser.add_argument("--out", type=Path, default=REPO_ROOT / "results", help="where runs go")
