@@ -28,8 +28,10 @@ CLASSES = {
     "viewer": "hsqbench.viz.config:ViewerConfig",
 }
 #: Files that are not one class's defaults: protocols (hsqbench.experiment.config, whose
-#: object lists and sizes are the experiment itself) and variants that extend another file.
+#: object lists and sizes are the experiment itself), variants that extend another file, and
+#: the list of canonical runs (hsqbench.experiment.canonical, tested in its own test).
 NOT_DEFAULTS = {
+    "canonical",
     "paper",
     "paper3",
     "paper3_facing",
