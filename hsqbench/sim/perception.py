@@ -285,6 +285,49 @@ class Perception:
             images.append(depth)
         return images
 
+    def _camera_cloud(
+        self,
+        cam: _Camera,
+        pose: Array,
+        true_pose: Array,
+        full: NDArray[np.float32],
+        depth: NDArray[np.float32],
+        roi: tuple[int, int, int, int],
+        K_roi: Array,
+    ) -> tuple[Array, CameraView]:
+        """Steps 3-4 for one camera: its region-of-interest ``depth`` (sensor errors applied)
+        back-projected with the believed ``pose``, cropped to the workspace and cleared of the
+        table; returns those points and the camera's :class:`CameraView` (``full`` gives the
+        image size of its ``depth_m``)."""
+        cfg = self.config
+        v0, v1, u0, u1 = roi
+        measured = np.zeros_like(full)
+        measured[v0:v1, u0:u1] = depth
+        valid = depth > 0
+        points = transform_points(pose, backproject(depth, K_roi)[valid])
+        margin = cfg.crop.workspace_margin_m
+        points = points[workspace_mask(points, self.workspace_min, self.workspace_max, margin)]
+        plane = (
+            refit_table_plane(points, self.support_plane, cfg.crop)
+            if cfg.crop.refit_table
+            else self.support_plane
+        )
+        points = points[points @ plane[:3] + plane[3] > cfg.crop.table_margin_m]
+        view = CameraView(
+            name=cam.name,
+            K=cam.K.copy(),
+            width_px=cam.width_px,
+            height_px=cam.height_px,
+            T_world_camera=pose,
+            T_world_camera_true=true_pose,
+            depth_m=measured,
+            roi=roi,
+            table_plane=plane,
+            n_valid_px=int(valid.sum()),
+            n_cropped=len(points),
+        )
+        return points, view
+
     def observe(self, data: mujoco.MjData, rng: np.random.Generator) -> PerceivedCloud:
         """One fused observation of the scene in ``data`` (see the module docstring).
 
@@ -318,33 +361,9 @@ class Perception:
                 depth = apply_tof_noise(depth, K_roi, cfg.tof, rng).depth_m
             t_noise += time.perf_counter() - t
             t = time.perf_counter()
-            measured = np.zeros_like(full)
-            measured[v0:v1, u0:u1] = depth
-            valid = depth > 0
-            points = transform_points(pose, backproject(depth, K_roi)[valid])
-            points = points[workspace_mask(points, self.workspace_min, self.workspace_max, margin)]
-            plane = (
-                refit_table_plane(points, self.support_plane, cfg.crop)
-                if cfg.crop.refit_table
-                else self.support_plane
-            )
-            points = points[points @ plane[:3] + plane[3] > cfg.crop.table_margin_m]
+            points, view = self._camera_cloud(cam, pose, true_pose, full, depth, roi, K_roi)
             clouds.append(points)
-            views.append(
-                CameraView(
-                    name=cam.name,
-                    K=cam.K.copy(),
-                    width_px=cam.width_px,
-                    height_px=cam.height_px,
-                    T_world_camera=pose,
-                    T_world_camera_true=true_pose,
-                    depth_m=measured,
-                    roi=roi,
-                    table_plane=plane,
-                    n_valid_px=int(valid.sum()),
-                    n_cropped=len(points),
-                )
-            )
+            views.append(view)
             t_cloud += time.perf_counter() - t
         t = time.perf_counter()
         fused, camera_index = fuse_and_downsample(clouds, cfg.voxel_m)
