@@ -29,7 +29,6 @@ KNOWN_CYCLES: list[set[str]] = []
 #: so they may shrink (then lower or drop the entry) but not grow.
 OVERSIZED_MODULES = {
     "hsqbench/sim/ik.py": 474,
-    "hsqbench/viz/rerun_recorder.py": 423,
 }
 #: Functions over the limit before the limit had a test, with their length today as ceiling.
 LONG_FUNCTIONS = {
