@@ -32,8 +32,6 @@ OVERSIZED_MODULES = {
 }
 #: Functions over the limit before the limit had a test, with their length today as ceiling.
 LONG_FUNCTIONS = {
-    "hsqbench/commands/sweep.py:add_arguments": 73,
-    "hsqbench/planner/hsq/stage_two/elimination.py:eliminate": 71,
     "hsqbench/sim/perception.py:observe": 64,
 }
 
