@@ -12,16 +12,17 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: help install learned test test-slow lint format bench benchmark sweeps assets clean
+.PHONY: help install learned test test-slow lint format bench benchmark sweeps results assets clean
 
 help:
-	@echo "make benchmark   run both experiments of the paper and write results/<run>/ (CONFIG=quick ...)"
+	@echo "make benchmark   run both experiments of the paper into runs/<run>/ (CONFIG=quick ...)"
 	@echo "make test        run the test suite (fast checks, as CI does)"
 	@echo "make test-slow   run the slow checks too (every object of the library, long fits)"
-	@echo "make sweeps      robustness sweeps: depth noise, calibration, one camera, pad friction (results/sweeps/)"
+	@echo "make sweeps      robustness sweeps: depth noise, calibration, one camera, pad friction (runs/sweeps/)"
+	@echo "make results     regenerate the canonical runs behind the README into results/ (~10 h on 2 cores, resumable)"
 	@echo "make bench       time the planner and the trial loop (bench/)"
 	@echo "make assets      build the whole object library (optional: benchmark builds what it needs)"
-	@echo "make learned     install the contact-graspnet planner (torch, cgn-pytorch, torch-cluster)"
+	@echo "make learned     install the contact-graspnet planner (torch, torch-geometric, cgn-pytorch; wheels only)"
 	@echo "make lint        ruff"
 
 # The venv is (re)built when it is missing or when pyproject.toml changed since the last install.
@@ -44,14 +45,14 @@ TORCH_PIP ?= "torch==2.13.0+cpu" --extra-index-url https://download.pytorch.org/
 else
 TORCH_PIP ?= "torch>=2.5"
 endif
-# torch-cluster compiles one file at a time (MAX_JOBS=1: a shared machine; ~11 min on 2 cores
-# the first time). pip caches the wheel it builds, so later venvs install it in seconds.
+# Everything installs from wheels: the network's farthest point sampling, radius and k-nearest
+# searches, which torch-geometric takes from the torch-cluster package (no wheel on PyPI; 11 to 30
+# minutes to compile on 2 cores), run on hsqbench.planner.learned.cluster_ops, in pure torch.
 $(LEARNED_STAMP): $(STAMP)
 	$(PY) -c "import torch" 2>/dev/null || $(PY) -m pip install --quiet --retries 1 --no-deps $(TORCH_PIP)
-	$(PY) -m pip install --quiet wheel -e ".[learned]"
+	$(PY) -m pip install --quiet -e ".[learned]"
 	$(PY) -m pip install --quiet --no-deps "cgn-pytorch==0.4.3"
-	MAX_JOBS=$${MAX_JOBS:-1} $(PY) -m pip install --quiet --no-build-isolation "torch-cluster==1.6.3"
-	$(PY) -c "import cgn_pytorch, torch_cluster; print('contact-graspnet: installed')"
+	$(PY) -c "from hsqbench.planner.learned import network; network.import_backend(); print('contact-graspnet: installed')"
 	@touch $(LEARNED_STAMP)
 
 learned: $(LEARNED_STAMP)
@@ -78,19 +79,19 @@ bench: $(STAMP)
 assets: $(STAMP)
 	$(PY) -m hsqbench.cli assets build --all --jobs $(JOBS)
 
-# A protocol's experiments (default: the paper's two) with all its planners. The command builds
-# the objects the protocol uses (and downloads missing YCB ones) before the first trial.
+# A protocol's experiments (default: the paper's two) with all its planners, into runs/$(RUN)/
+# (git-ignored: no command but `make results` writes a tracked file). The command builds the
+# objects the protocol uses (and downloads missing YCB ones) before the first trial.
 # Re-running continues the same run (--resume): finished trials are kept, so a killed benchmark
 # loses nothing. RUN=name starts another run; CONFIG=quick (or a YAML path) another protocol.
 CONFIG ?= paper
 RUN ?= $(CONFIG)
 benchmark: $(STAMP)
 	$(PY) -m hsqbench.cli benchmark --protocol $(CONFIG) --run $(RUN) --jobs $(JOBS) --resume
-	@rm -rf results/latest && cp -r results/$(RUN) results/latest && rm -f results/latest/.lock
-	@echo "tables: results/latest/tables.md (copied from results/$(RUN))"
+	@echo "tables: runs/$(RUN)/tables.md"
 
 # The built-in robustness sweeps (configs/protocols/sweeps/) on the isolated protocol, paper and unseen
-# objects, into results/sweeps/ (sweep.csv, one PNG per parameter, a run per point). With JOBS=2
+# objects, into runs/sweeps/ (sweep.csv, one PNG per parameter, a run per point). With JOBS=2
 # on a 2-core machine the unseen objects' three seeds took 49 min for hsq and antipodal alone;
 # contact-graspnet, where installed, adds about 15 min per sweep on the paper's objects
 # (SWEEP_PLANNERS="hsq single-sq antipodal" leaves it out; a later run adds it to the same runs).
@@ -101,6 +102,15 @@ SWEEP_ARGS ?=
 sweeps: $(STAMP)
 	$(PY) -m hsqbench.cli sweep $(SWEEPS) --run sweeps --jobs $(JOBS) \
 		$(if $(SWEEP_PLANNERS),--planners $(SWEEP_PLANNERS)) $(SWEEP_ARGS)
+
+# The canonical runs behind README.md and docs/ (the list: configs/canonical.yaml), into
+# results/, with every planner (the learned extra too) at this code version: about 10 hours with
+# JOBS=2 on a 2-core machine. Resumable: rerunning continues where it stopped. ONLY="paper3 ycb3"
+# makes some of them; RESULTS_ARGS="--dry-run" lists them with their expected time.
+ONLY ?=
+RESULTS_ARGS ?=
+results: $(LEARNED_STAMP)
+	$(PY) -m hsqbench.experiment.canonical --jobs $(JOBS) $(if $(ONLY),--only $(ONLY)) $(RESULTS_ARGS)
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache

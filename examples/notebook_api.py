@@ -18,7 +18,7 @@ trial = hsqbench.run_trial("foam_brick", planner=TOPDOWN, seed=0)
 print(f"trial: {trial.object} -> {trial.attempts[0].outcome.value}")
 
 # A benchmark: the protocol's scenes for our planner (add "hsq" to compare), into a run folder.
-run_dir = sys.argv[1] if len(sys.argv) > 1 else "results/notebook-example"
+run_dir = sys.argv[1] if len(sys.argv) > 1 else "runs/notebook-example"
 run = hsqbench.run_benchmark(
     "quick", planners=[TOPDOWN], run=run_dir, experiments=["isolated"], jobs=2, resume=True
 )

@@ -3,7 +3,7 @@
     import hsqbench
     trial = hsqbench.run_trial("foam_brick", planner="examples/topdown.py:TopDown", seed=3)
     run = hsqbench.run_benchmark("quick", planners=["examples/topdown.py:TopDown", "hsq"],
-                                 run="results/mine", experiments=["isolated"], jobs=2)
+                                 run="runs/mine", experiments=["isolated"], jobs=2)
     run.attempts.groupby("planner")["success"].mean()
 
 A planner is a name (``hsqbench planners``), a plugin spec (``module:Name``,
@@ -70,8 +70,8 @@ def protocol_planners(
 
 
 def run_folder(run: str | None, protocol: str) -> Path:
-    """The run folder: ``run`` (a name under ``results/``, or a path), else
-    ``results/<protocol>-<UTC time>``."""
+    """The run folder: ``run`` (a name under ``runs/``, or a path), else
+    ``runs/<protocol>-<UTC time>``."""
     from datetime import UTC, datetime
 
     from hsqbench.settings import RESULTS_DIR
@@ -156,7 +156,7 @@ def run_benchmark(
         protocol: ``paper``, ``quick``, ... (``configs/``) or a YAML path.
         planners: names, specs or (with ``jobs=1``) planner classes or objects of this process;
             default the protocol's own. One the protocol lacks joins its list.
-        run: the run folder (a name goes under ``results/``); default ``<protocol>-<UTC time>``.
+        run: the run folder (a name goes under ``runs/``); default ``<protocol>-<UTC time>``.
         experiments: only these (``isolated``, ``packed``, ``pile``).
         jobs: worker processes (1: this process).
         resume, force: continue the run in ``run``, or move it aside and start anew.

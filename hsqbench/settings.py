@@ -30,7 +30,10 @@ PROTOCOL_DIR = CONFIG_DIR / "protocols"
 #: The built-in robustness sweeps (``hsqbench sweep depth_noise``).
 SWEEP_DIR = PROTOCOL_DIR / "sweeps"
 SCENES_DIR = REPO_ROOT / "scenes"
-RESULTS_DIR = REPO_ROOT / "results"
+#: Where a run named without a path goes (``--run NAME``, the Makefile's targets): ``runs/``,
+#: git-ignored, so no command a user runs changes a tracked file. ``results/`` holds the canonical
+#: runs behind the README, written only by ``make results``, which names its folders as paths.
+RESULTS_DIR = REPO_ROOT / "runs"
 
 
 class SettingError(RuntimeError):

@@ -28,10 +28,11 @@ CLASSES = {
     "viewer": "hsqbench.viz.config:ViewerConfig",
     "volumetric": "hsqbench.planner.learned.volumetric_config:VolumetricConfig",
 }
-#: Files that are not one class's defaults: variants that extend another file. The protocols
+#: Files that are not one class's defaults: variants that extend another file, and the list of
+#: canonical runs (hsqbench.experiment.canonical, tested in its own test). The protocols
 #: (configs/protocols/, whose object lists and sizes are the experiment itself) are tested in
 #: tests/test_experiment_config.py.
-NOT_DEFAULTS = {"scene_resting", "trial_resting"}
+NOT_DEFAULTS = {"canonical", "scene_resting", "trial_resting"}
 
 
 def _class(spec: str):

@@ -104,10 +104,12 @@ def test_every_grasp_has_a_finger_on_the_cloud_and_scores_in_order(planner):
 
 
 def test_top_grasps_close_on_opposite_faces_of_the_box(plans):
-    # Measured 0, 0, 4, 4 and 3 of the top ten for seeds 0-4 (the network's closing axes scatter
-    # by tens of degrees); a wrong frame or a misplaced P_G gives none.
+    # Measured 10 of the top ten for each of seeds 0-4 with the pure-torch neighbourhoods
+    # (cluster_ops: each PointNet++ ball a uniform draw, as in training on a GPU); torch-cluster's
+    # CPU balls (a k-d tree's subset) gave 0, 0, 4, 4 and 3, and the 64 nearest points 2, 6, 4, 6
+    # and 0. A wrong frame, a misplaced P_G or biased neighbourhoods give far fewer.
     n_opposite = sum(closes_on_opposite_faces(g) for plan in plans for g in plan.grasps[:10])
-    assert n_opposite >= 6, n_opposite
+    assert n_opposite >= 40, n_opposite
 
 
 def test_grasps_approach_from_outside_the_box(plans):
@@ -141,6 +143,7 @@ def test_elimination_variant_keeps_only_grasps_that_pass_the_rules(planner, plan
         assert len(plan.grasps) == plan.candidates.counts_by_reason()["kept"]
         assert sum(plan.removed_by.values()) == plan.remaining["synthesised"] - len(plan.grasps)
         survivors += list(plan.grasps)
-    # Measured 0, 0, 2, 8 and 5 survivors for seeds 0-4, every one across the 6 cm faces.
-    assert len(survivors) >= 5
+    # Measured 28, 26, 28, 29 and 22 survivors for seeds 0-4, every one across the 6 cm faces
+    # (with torch-cluster's CPU neighbourhoods 0, 0, 2, 8 and 5).
+    assert len(survivors) >= 60
     assert all(closes_on_opposite_faces(g) for g in survivors)

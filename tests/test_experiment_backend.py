@@ -9,7 +9,12 @@ from dataclasses import dataclass
 
 import pytest
 
-from hsqbench.experiment.backend import SimBackend, TrialRunnerUnavailable, execute_trial
+from hsqbench.experiment.backend import (
+    SimBackend,
+    TrialRunnerUnavailable,
+    execute_trial,
+    presentation_groups,
+)
 from hsqbench.experiment.seeds import TrialSpec
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
 
@@ -120,3 +125,14 @@ def test_overrides_reach_into_named_configs_and_change_the_fingerprint() -> None
         SimBackend("trial", overrides=(("physics.nothing.here", 1),)).fingerprint()
     with pytest.raises(ConfigError, match=r"physics\.timestep_s holds .* which has no keys"):
         SimBackend("trial", overrides=(("physics.timestep_s.x", 1),)).fingerprint()
+
+
+def test_presentation_groups_put_a_presentations_planners_together() -> None:
+    """Consecutive specs that differ only in the planner form one group, in order; any other
+    difference (pose index, seed, objects, experiment) starts a new one."""
+    a, b = (TrialSpec("isolated", p, 0, 0, ("mug",), 11) for p in ("a", "b"))
+    c = TrialSpec("isolated", "a", 0, 1, ("mug",), 12)
+    d, e = (TrialSpec("packed", p, 0, 0, ("mug", "bowl"), 13) for p in ("a", "b"))
+    f = TrialSpec("isolated", "b", 0, 0, ("mug",), 11)  # the first pose again, not adjacent
+    assert presentation_groups([a, b, c, d, e, f]) == [[a, b], [c], [d, e], [f]]
+    assert presentation_groups([]) == []

@@ -60,6 +60,12 @@ def test_process_pool_gives_the_same_rows_as_one_process(serial_run, tmp_path) -
     assert _rows(run_dir, "rounds") == _rows(serial_run, "rounds")
     workers = {r["worker"] for r in load_results(run_dir).attempts}
     assert len(workers) == 2  # really two processes
+    # A presentation's planners run in one worker, one after another (they share its scene).
+    by_presentation: dict[str, set[str]] = {}
+    for r in load_results(run_dir).attempts:
+        experiment, _planner, rest = r["trial_key"].split("/", 2)
+        by_presentation.setdefault(f"{experiment}/{rest}", set()).add(r["worker"])
+    assert all(len(w) == 1 for w in by_presentation.values())
 
 
 def test_a_worker_crash_is_pinned_on_its_trial(tmp_path) -> None:

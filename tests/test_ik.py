@@ -148,3 +148,39 @@ def test_bad_poses_and_config_are_refused():
         IKConfig(position_tolerance_m=0.0)
     with pytest.raises(ValueError, match="segment"):
         line_poses(Pose([0, 0, 0], np.eye(3)), [0, 0, 1], 0)
+
+
+def _points_hit_everywhere(ik: ArmIK, qs, points, margin_m: float, min_points: int):
+    """``ArmIK.points_hit`` without its sphere pre-test: every geom's box at every sample."""
+    m, d, g = ik.model, ik.data, ik.robot_geoms
+    centre, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:] + margin_m
+    for k, q in enumerate(qs):
+        ik.configuration.update(ik._full_q(q))
+        rot = d.geom_xmat[g].reshape(-1, 3, 3)
+        local = np.einsum("gji,gmj->gmi", rot, points[None] - d.geom_xpos[g][:, None])
+        counts = np.all(np.abs(local - centre[:, None]) <= half[:, None], axis=2).sum(axis=1)
+        if counts.max() >= min_points:
+            i = int(np.argmax(counts))
+            return k, int(g[i]), int(counts[i])
+    return -1, -1, 0
+
+
+def test_points_hit_finds_what_testing_every_box_finds(scene):
+    """The first sample, geom and count at which the arm's boxes meet a cloud: the same as
+    testing every geom's box at every sample, for clouds near the hand's path and far off."""
+    _, _, _, panda, ik = scene
+    rng = np.random.default_rng(3)
+    start = panda.home_arm_q
+    hits = 0
+    for _ in range(40):
+        qs = np.linspace(start, start + rng.normal(0.0, 0.5, 7), 12)
+        centre = ik.forward(qs[rng.integers(12)]).position + rng.normal(0.0, 0.05, 3)
+        points = centre + rng.normal(0.0, rng.uniform(0.005, 0.1), (int(rng.integers(20, 400)), 3))
+        margin, need = float(rng.uniform(0.0, 0.02)), int(rng.integers(1, 6))
+        found = ik.points_hit(qs, points, margin, need)
+        assert found == _points_hit_everywhere(ik, qs, points, margin, need)
+        hits += found[0] >= 0
+    assert 5 < hits < 40  # both kinds of motion were checked
+    far = np.full((10, 3), 5.0)
+    assert ik.points_hit(qs, far, 0.01, 1) == (-1, -1, 0)
+    assert ik.points_hit(qs, np.zeros((0, 3)), 0.01, 1) == (-1, -1, 0)

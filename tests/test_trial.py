@@ -34,6 +34,7 @@ from hsqbench.sim.trial import (
     run_isolated_trial,
     run_packed_round,
 )
+from hsqbench.sim.trial.presentation import CACHE
 from hsqbench.sim.trial.protocols import _clear
 
 TOP_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
@@ -152,6 +153,7 @@ def test_hsq_grasps_the_box_into_the_bin_and_is_deterministic(config):
     assert attempt.score == pytest.approx(np.prod(list(attempt.factors.values())), rel=1e-6)
     assert 0.0 < attempt.width_m <= 0.08
     assert attempt.planning_s > 0 and attempt.execution_s > 0
+    CACHE.clear()  # built anew, not the kept presentation (tests/test_trial_presentation.py)
     again = run_isolated_trial("proc_box", 1, "hsq", config)
     assert _timeless(again) == _timeless(first)
 
@@ -380,6 +382,7 @@ def test_packed_round_with_hsq_follows_the_rules_and_is_deterministic(config):
     assert cleared_all or two_failures or len(outcomes) == config.packed.max_attempts
     # No two failures in a row before the end of the round.
     assert not any(not a and not b for a, b in pairwise(outcomes[:-1]))
+    CACHE.clear()  # built anew, not the kept presentation
     again = run_packed_round(objects, 7, "hsq", config)
     assert _timeless(again) == _timeless(first)
 

@@ -74,11 +74,12 @@ def test_replay_reproduces_the_run_into_a_recording(tmp_path):
 
 
 def test_a_run_made_before_the_config_tree_still_replays() -> None:
-    """results/latest was recorded with config names and planner_config: null; its replay
-    config is today's tree with the recorded values."""
-    from hsqbench.settings import REPO_ROOT
+    """A run recorded with config names and planner_config: null (its run.json, kept in
+    tests/data): its replay config is today's tree with the recorded values."""
+    from pathlib import Path
+
     from hsqbench.sim.trial import load_trial_config
 
-    old = run_trial_config(REPO_ROOT / "results" / "latest")
+    old = run_trial_config(Path(__file__).parent / "data" / "run_before_config_tree")
     assert old.planners == load_trial_config().planners
     assert old.scene == load_trial_config().scene and old.max_ranks == 48

@@ -2,7 +2,7 @@
 
 It only builds the planner list (``hsq``, ``hsq-paper``, ``hsq-no-<addition>`` for each chosen
 addition of :mod:`hsqbench.planner.hsq.additions`, plus any ``--with`` baselines) and runs the
-protocol's experiments with it through the benchmark runner, into results/<run>/ with the usual
+protocol's experiments with it through the benchmark runner, into runs/<run>/ with the usual
 tables: each row against ``hsq`` is what that addition buys.
 """
 
@@ -20,7 +20,7 @@ HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions of
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_protocol(parser)
     parser.add_argument(
-        "--run", default=None, metavar="NAME", help="run name under results/ (or a folder path)"
+        "--run", default=None, metavar="NAME", help="run name under runs/ (or a folder path)"
     )
     parser.add_argument(
         "--additions",

@@ -1,4 +1,4 @@
-"""``hsqbench benchmark``: run the paper's experiments (or any protocol config) into results/<run>/."""
+"""``hsqbench benchmark``: run the paper's experiments (or any protocol config) into runs/<run>/."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from hsqbench.experiment.runner import RunSummary
 
 HELP = (
-    "run the experiments of a benchmark protocol with its planners (or yours) into results/<run>/"
+    "run the experiments of a benchmark protocol with its planners (or yours) into runs/<run>/"
 )
 
 
@@ -29,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--run",
         default=None,
         metavar="NAME",
-        help="run name under results/ (or a folder path); default <protocol>-<UTC time>",
+        help="run name under runs/ (or a folder path); default <protocol>-<UTC time>",
     )
     add_jobs(parser)
     parser.add_argument(

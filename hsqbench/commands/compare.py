@@ -16,7 +16,7 @@ HELP = "compare two runs of one protocol trial by trial: paired differences and 
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("run_a", type=Path, help="the baseline run folder (results/<run>)")
+    parser.add_argument("run_a", type=Path, help="the baseline run folder (runs/<run>)")
     parser.add_argument("run_b", type=Path, help="the run to judge against it")
     parser.add_argument(
         "--planners", nargs="+", default=None, metavar="NAME", help="only these planners"
@@ -129,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
 
     for path in (args.run_a, args.run_b):
         if not path.is_dir():
-            raise FileNotFoundError(f"{path} is not a folder; give two run folders results/<run>")
+            raise FileNotFoundError(f"{path} is not a folder; give two run folders runs/<run>")
     a, b = load_run(args.run_a), load_run(args.run_b)
     columns = tuple(c for c in args.columns.split(",") if c) if args.columns else MATCH
     unknown = [c for c in columns if c not in MATCH]

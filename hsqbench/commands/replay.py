@@ -16,9 +16,9 @@ its first attempt up to --attempt. Each replayed attempt is printed as
 `KEY #I: RECORDED -> REPLAYED (detail)`.
 
 Examples:
-  hsqbench replay results/quick --trial isolated/hsq/s0/mug/000
-  hsqbench replay results/quick --outcome dropped --limit 5 --set execution.release_height_m=0.01
-  hsqbench replay results/quick --trial packed/hsq/s0/003 --attempt 2 --rerun round.rrd
+  hsqbench replay runs/quick --trial isolated/hsq/s0/mug/000
+  hsqbench replay runs/quick --outcome dropped --limit 5 --set execution.release_height_m=0.01
+  hsqbench replay runs/quick --trial packed/hsq/s0/003 --attempt 2 --rerun round.rrd
 
 The replay is exact when the executed grasp was the first one motion-planned (ranks_tried 1);
 otherwise the inverse kinematics draws other restarts and a borderline attempt may differ

@@ -9,7 +9,7 @@ HELP = "write tables.md, table CSVs and PNG plots of a benchmark run from its re
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("run_dir", type=Path, help="the run folder, e.g. results/paper-20250101")
+    parser.add_argument("run_dir", type=Path, help="the run folder, e.g. runs/paper-20250101")
     parser.add_argument(
         "--with",
         dest="with_runs",
@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.experiment.report import write_report
 
     if not args.run_dir.is_dir():
-        raise FileNotFoundError(f"{args.run_dir} is not a folder; give results/<run>")
+        raise FileNotFoundError(f"{args.run_dir} is not a folder; give runs/<run>")
     for path in write_report(args.run_dir, tuple(args.with_runs), args.reference):
         print(path)
     return 0

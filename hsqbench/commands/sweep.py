@@ -92,7 +92,7 @@ def _add_scope(parser: argparse.ArgumentParser) -> None:
         "--run",
         default="sweeps",
         metavar="NAME",
-        help="sweep folder under results/ or a path (default results/sweeps); rerunning resumes",
+        help="sweep folder under runs/ or a path (default runs/sweeps); rerunning resumes",
     )
 
 

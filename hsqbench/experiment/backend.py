@@ -17,6 +17,7 @@ import os
 import socket
 import time
 import traceback
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
@@ -143,6 +144,29 @@ def execute_trial(backend: TrialBackend, spec: TrialSpec) -> TrialRun:
         error = f"{type(exc).__name__}: {exc}{where}"
         return TrialRun(spec, None, _one_line(error), time.perf_counter() - start, worker)
     return TrialRun(spec, result, None, time.perf_counter() - start, worker)
+
+
+def presentation_groups(specs: Sequence[TrialSpec]) -> list[list[TrialSpec]]:
+    """The specs as runs of one presentation each: consecutive specs that differ only in the
+    planner (the trial list puts a presentation's planners side by side), in order."""
+    groups: list[list[TrialSpec]] = []
+    for spec in specs:
+        if groups and _presentation(groups[-1][0]) == _presentation(spec):
+            groups[-1].append(spec)
+        else:
+            groups.append([spec])
+    return groups
+
+
+def _presentation(spec: TrialSpec) -> tuple:
+    return (spec.experiment, spec.base_seed, spec.index, spec.objects, spec.seed)
+
+
+def execute_group(backend: TrialBackend, specs: Sequence[TrialSpec]) -> list[TrialRun]:
+    """:func:`execute_trial` for each spec of one presentation, in one worker: its planners
+    then share the scene, the first look and the graspability search
+    (:mod:`hsqbench.sim.trial.presentation`)."""
+    return [execute_trial(backend, s) for s in specs]
 
 
 @dataclass

@@ -4,12 +4,17 @@ Every executor yields one :class:`~hsqbench.experiment.backend.TrialRun` per tri
 trials finish; the parent process alone writes results. A trial is a pure function of
 (backend, spec), so all executors give the same records for the same seeds.
 
+The pool and Ray executors hand a worker one *presentation* at a time: the trials that differ
+only in the planner (:func:`~hsqbench.experiment.backend.presentation_groups`), run one after
+another in that worker, so they share the scene and the first look
+(:mod:`hsqbench.sim.trial.presentation`); the serial executor runs them in the same order.
+
 A worker process that dies (segfault in native code, out of memory, ``os._exit``) breaks a
 ``ProcessPoolExecutor``, and the pool cannot say which trial did it. The local executor then
-re-runs the trials that may have been in flight (at most ``2 * jobs + 1``, the earliest
-unfinished ones: the pool feeds ``jobs + 1`` queued calls in submission order) one at a time in
-fresh single-worker pools; the trial that kills its worker again is recorded as an error, the
-others complete normally, and the rest of the run goes on in a fresh pool.
+re-runs the presentations that may have been in flight (at most ``2 * jobs + 1``, the earliest
+unfinished ones: the pool feeds ``jobs + 1`` queued calls in submission order) one trial at a
+time in fresh single-worker pools; the trial that kills its worker again is recorded as an
+error, the others complete normally, and the rest of the run goes on in a fresh pool.
 """
 
 from __future__ import annotations
@@ -25,7 +30,13 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from hsqbench.experiment.backend import TrialBackend, TrialRun, execute_trial
+from hsqbench.experiment.backend import (
+    TrialBackend,
+    TrialRun,
+    execute_group,
+    execute_trial,
+    presentation_groups,
+)
 from hsqbench.experiment.seeds import TrialSpec
 
 EXECUTORS = ("local", "ray")
@@ -59,8 +70,11 @@ def _mp_context() -> multiprocessing.context.BaseContext:
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
     ctx = multiprocessing.get_context("forkserver")
-    # Workers fork from a server that has already imported the trial code: cheap fresh pools.
-    ctx.set_forkserver_preload(["hsqbench.experiment.backend"])
+    # Workers fork from a server that has already imported the trial code and the planners'
+    # heavy imports (scikit-learn, SciPy): cheap fresh pools.
+    ctx.set_forkserver_preload(
+        ["hsqbench.experiment.backend", "hsqbench.sim.trial", "hsqbench.planner.hsq.stage_one.recovery"]
+    )
     return ctx
 
 
@@ -107,44 +121,49 @@ class LocalExecutor:
             raise ValueError(f"jobs must be >= 1, got {self.jobs}")
 
     def _pass(
-        self, backend: TrialBackend, specs: Sequence[TrialSpec], workers: int, broken: list[Any]
+        self,
+        backend: TrialBackend,
+        groups: Sequence[list[TrialSpec]],
+        workers: int,
+        broken: list[list[TrialSpec]],
     ) -> Iterator[TrialRun]:
-        """Run ``specs`` in one pool; specs lost to a broken pool are appended to ``broken``."""
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(specs)), mp_context=_mp_context())
+        """Run ``groups`` (one presentation each) in one pool; groups lost to a broken pool
+        are appended to ``broken``."""
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(groups)), mp_context=_mp_context())
         clean = False
         try:
-            with _main_not_reimported():  # the workers start as trials are submitted
-                futures: dict[Future[TrialRun], TrialSpec] = {
-                    pool.submit(execute_trial, backend, s): s for s in specs
+            with _main_not_reimported():  # the workers start as groups are submitted
+                futures: dict[Future[list[TrialRun]], list[TrialSpec]] = {
+                    pool.submit(execute_group, backend, g): g for g in groups
                 }
-            lost: set[str] = set()
+            lost: set[int] = set()
             for fut in as_completed(futures):
-                spec = futures[fut]
+                group = futures[fut]
                 try:
-                    run = fut.result()
+                    runs = fut.result()
                 except BrokenProcessPool:
-                    lost.add(spec.key)
+                    lost.add(id(group))
                     continue
                 except Exception as exc:  # e.g. a result that cannot be pickled
-                    run = TrialRun.failed(spec, f"{type(exc).__name__}: {exc}")
-                yield run
-            broken.extend(s for s in futures.values() if s.key in lost)  # submission order
+                    runs = [TrialRun.failed(s, f"{type(exc).__name__}: {exc}") for s in group]
+                yield from runs
+            broken.extend(g for g in futures.values() if id(g) in lost)  # submission order
             clean = True
         finally:
             _stop_pool(pool, clean)
 
     def run(self, backend: TrialBackend, specs: Sequence[TrialSpec]) -> Iterator[TrialRun]:
-        queue = list(specs)
+        queue = presentation_groups(specs)
         while queue:
-            lost: list[TrialSpec] = []
+            lost: list[list[TrialSpec]] = []
             yield from self._pass(backend, queue, self.jobs, lost)
             if not lost:
                 return
             n_suspects = 2 * self.jobs + 1
             suspects, queue = lost[:n_suspects], lost[n_suspects:]
-            for spec in suspects:
-                again: list[TrialSpec] = []
-                yield from self._pass(backend, [spec], 1, again)
+            for spec in (s for group in suspects for s in group):
+                again: list[list[TrialSpec]] = []
+                yield from self._pass(backend, [[spec]], 1, again)
                 if again:
                     yield TrialRun.failed(spec, WORKER_DIED)
 
@@ -219,18 +238,20 @@ class RayExecutor:
             started = True
         pending: list[Any] = []
         try:
-            task = ray.remote(max_retries=0, num_cpus=1)(execute_trial)
+            task = ray.remote(max_retries=0, num_cpus=1)(execute_group)
             backend_ref = ray.put(backend)
-            refs = {task.remote(backend_ref, s): s for s in specs}
+            refs = {task.remote(backend_ref, g): g for g in presentation_groups(specs)}
             pending = list(refs)
             while pending:
                 done, pending = ray.wait(pending, num_returns=1)
                 for ref in done:
                     try:
-                        run = ray.get(ref)
+                        runs = ray.get(ref)
                     except ray.exceptions.RayError as exc:  # worker died, task error, ...
-                        run = TrialRun.failed(refs[ref], f"{type(exc).__name__}: {exc}")
-                    yield run
+                        runs = [
+                            TrialRun.failed(s, f"{type(exc).__name__}: {exc}") for s in refs[ref]
+                        ]
+                    yield from runs
         finally:
             for ref in pending:
                 ray.cancel(ref, force=True)

@@ -1,6 +1,6 @@
 """The results of a run: append-only CSV files that survive a killed run.
 
-Layout of ``results/<run>/``:
+Layout of ``runs/<run>/``:
 
 - ``attempts.csv``: one row per grasp attempt (isolated, packed and pile), or one
   ``status=error`` row for a trial that could not run (``attempt_index=-1``, ``n_attempts=0``).

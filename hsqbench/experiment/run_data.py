@@ -56,7 +56,7 @@ def load_run(run_dir: str | Path) -> RunData:
     run_dir = Path(run_dir)
     if not any((run_dir / name).exists() for name in ("attempts.csv", "attempts.csv.gz")):
         raise FileNotFoundError(
-            f"{run_dir}: no attempts.csv; give the folder of a run (results/<run>)"
+            f"{run_dir}: no attempts.csv; give the folder of a run (runs/<run>)"
         )
     results = load_results(run_dir)
     notes = []

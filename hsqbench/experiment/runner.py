@@ -1,6 +1,6 @@
 """Run a protocol: build the trial list, skip what a run folder already holds, run the rest.
 
-The runner owns the run folder (``results/<run>/``): it checks that a resumed run has the same
+The runner owns the run folder (``runs/<run>/``): it checks that a resumed run has the same
 config hash, repairs the files after a kill (see :mod:`hsqbench.experiment.results`), records
 each trial as it finishes, and shows its progress with the running GSR per planner (a bar on a
 terminal, periodic plain lines in a log: :mod:`hsqbench.experiment.progress`).

@@ -1,6 +1,6 @@
 """Run a sweep: every point of every parameter on every protocol, each an ordinary run folder.
 
-Layout of a sweep folder (default ``results/sweeps/``)::
+Layout of a sweep folder (default ``runs/sweeps/``)::
 
     sweep.json                      the parameters run into this folder, their points and runs
     sweep.csv                       one row per protocol, experiment, parameter, point, planner

@@ -233,16 +233,28 @@ class ArmIK:
             return -1, -1, 0
         m, d, g = self.model, self.data, self.robot_geoms
         centre, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:] + margin_m
+        # A point in a box lies within the box's half-diagonal of its centre: a geom whose
+        # sphere misses the cloud's bounding box holds no point (most of them, most of the way).
+        reach = np.linalg.norm(half, axis=1) + 1e-9
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        every = min_points < 1  # then a sample with no point in any box is a hit too
         for k, q in enumerate(np.asarray(qs, dtype=float)):
             self.configuration.update(self._full_q(q))
             rot = d.geom_xmat[g].reshape(-1, 3, 3)
-            # Points in each geom's frame, relative to its box centre: (G, M, 3).
-            local = np.einsum("gji,gmj->gmi", rot, pts[None] - d.geom_xpos[g][:, None])
-            inside = np.all(np.abs(local - centre[:, None]) <= half[:, None], axis=2)
+            box = d.geom_xpos[g] + np.einsum("gij,gj->gi", rot, centre)
+            near = np.flatnonzero(
+                every
+                | (np.linalg.norm(np.maximum(np.maximum(lo - box, box - hi), 0.0), axis=1) <= reach)
+            )
+            if not len(near):
+                continue
+            # Points in each near geom's frame, relative to its box centre: (G, M, 3).
+            local = np.einsum("gji,gmj->gmi", rot[near], pts[None] - d.geom_xpos[g[near]][:, None])
+            inside = np.all(np.abs(local - centre[near, None]) <= half[near, None], axis=2)
             counts = inside.sum(axis=1)
             if counts.max() >= min_points:
-                i = int(np.argmax(counts))
-                return k, int(g[i]), int(counts[i])
+                j = int(np.argmax(counts))  # the first of the most, as over all geoms
+                return k, int(g[near[j]]), int(counts[j])
         return -1, -1, 0
 
     def hand_extent(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -334,9 +346,10 @@ class ArmIK:
                 self.lower + margin, self.upper - margin, size=(self.config.seed_library_size, 7)
             )
             pos, rot = np.empty((len(qs), 3)), np.empty((len(qs), 3, 3))
-            for i, q in enumerate(qs):
-                pose = self.forward(q)
-                pos[i], rot[i] = pose.position, pose.rotation
+            sid = p.tcp_site_id
+            for i, q in enumerate(qs):  # forward() without a validated Pose per posture
+                self.configuration.update(self._full_q(q))
+                pos[i], rot[i] = self.data.site_xpos[sid], self.data.site_xmat[sid].reshape(3, 3)
             keep = pos[:, 2] > 0.0
             _LIBRARIES[key] = (qs[keep], pos[keep], rot[keep])
         return _LIBRARIES[key]

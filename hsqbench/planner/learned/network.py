@@ -3,11 +3,19 @@
 The package's own ``inference()`` is not used: it subsamples with Python's global ``random`` and
 prints. Here the same forward pass runs (with the same ``gripper_width=0.08`` and depth) on a
 subsample drawn, and put in an order drawn, from ``numpy.random.default_rng(seed)``. The network's
-farthest point sampling (torch-cluster) starts at a random point that ignores every seed (its CPU
-code does not use torch's generator: measured, three calls after ``torch.manual_seed(0)`` gave
-three different starts), so it is run with ``random_start=False`` here and inside the network (the
+farthest point sampling is run with ``random_start=False`` here and inside the network (the
 package's ``pointnet2.fps`` is replaced once, at load): it then starts at the first point of the
-seeded order, and one seed gives one result. torch, torch-geometric, torch-cluster and cgn-pytorch are imported here only.
+seeded order, and one seed gives one result. torch, torch-geometric and cgn-pytorch are imported
+here only.
+
+torch-geometric's ``fps``, ``radius`` and ``knn`` run on :mod:`.cluster_ops` (pure torch), not on
+the torch-cluster package (no binary wheel; 11 to 30 minutes to compile). fps and knn give
+torch-cluster's indices; ``radius`` keeps, of the points in a ball, the first
+``max_num_neighbors`` (64 here) in the input's order, as torch-cluster's CUDA kernel and
+PointNet++'s ball query do, where torch-cluster's CPU code kept the first its k-d tree visited.
+The input order is a seeded random permutation, so each ball's 64 points are a uniform draw from
+it. The CPU results of runs made before this change (with torch-cluster) therefore differ in the
+grasps, not in the frames or the harness (docs/contact-graspnet.md).
 
 The width head of the 0.4.3 weights is not usable: its batch-norm running variance is ~1e9 and
 its raw outputs on a harness box cloud range from -2600 to +200 (metres), uncorrelated with the
@@ -30,8 +38,8 @@ from numpy.typing import NDArray
 #: How to install what this module needs (the error names it when an import fails).
 INSTALL_HINT = (
     "the contact-graspnet planner needs the optional 'learned' extra: run "
-    "`pip install -e '.[learned]'` and then `make learned` (installs cgn-pytorch without its "
-    "pinned dependencies and builds torch-cluster from source, about 11 minutes on 2 cores)"
+    "`pip install -e '.[learned]' && pip install --no-deps cgn-pytorch==0.4.3`, or `make learned` "
+    "(all from wheels, a minute or two)"
 )
 #: ``gripper_width`` the package's ``inference()`` hands the forward pass (Franka stroke).
 _FORWARD_GRIPPER_WIDTH_M = 0.08
@@ -66,6 +74,9 @@ def import_backend():
             from torch_geometric.nn import fps
     except ImportError as exc:
         raise LearnedExtraMissing(f"{INSTALL_HINT} ({exc})") from exc
+    from hsqbench.planner.learned import cluster_ops  # imports torch: only once torch is there
+
+    cluster_ops.install()
     return torch, fps, cgn_pytorch
 
 

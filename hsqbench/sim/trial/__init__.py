@@ -53,7 +53,9 @@ cameras' view: not cleared) are taken out of the scene.
 
 Determinism: everything random comes from ``seed`` (scene layout, sensor noise and calibration,
 planner seed, IK restarts, each from its own ``SeedSequence`` stream) and MuJoCo is deterministic,
-so the same seed and config give the same outcomes and numbers (timings aside).
+so the same seed and config give the same outcomes and numbers (timings aside). Planners that
+meet the same presentation one after another in a process share its built scene and first look
+(:mod:`hsqbench.sim.trial.presentation`), with the same outcomes as building it each time.
 
 Where the runner uses simulator truth rather than what the robot perceives: the judge (as any
 simulated benchmark) and the names in the records (``target``: the object held, or nearest the

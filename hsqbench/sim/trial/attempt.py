@@ -33,7 +33,8 @@ class AttemptTrace:
         phases: simulated seconds per motion phase.
         ranks_tried: distinct grasps motion-planned (duplicates of failed ones are skipped).
         flipped: the executed grasp was the twin turned by pi.
-        scene_build_s: wall seconds of building the scene (first attempt of a trial or round;
+        scene_build_s: wall seconds of building the scene (first attempt of a trial or round; a
+            presentation kept from an earlier planner: resetting it;
             0 for later attempts). The first ``perception_s`` includes making the sensor.
         graspable_objects: objects on the table with a feasible oracle grasp at this attempt
             (None: not checked).
@@ -79,13 +80,11 @@ def _finish(env: TrialEnv, attempt: Attempt, trace: AttemptTrace) -> tuple[Attem
     return attempt, trace
 
 
-def _presented(env: TrialEnv, trace: AttemptTrace, truth: Any) -> dict[str, Any]:
+def _presented(env: TrialEnv, trace: AttemptTrace, graspable: list[str] | None) -> dict[str, Any]:
     """What the attempt records about the presentation: graspable, and for a single object its
     pose and resting pose."""
-    trace.graspable_objects = env.graspable_objects(truth)
-    presented: dict[str, Any] = {
-        "graspable": None if trace.graspable_objects is None else bool(trace.graspable_objects)
-    }
+    trace.graspable_objects = graspable
+    presented: dict[str, Any] = {"graspable": None if graspable is None else bool(graspable)}
     if len(env.info.objects) == 1:
         only = env.info.objects[0]
         presented["object_pose"] = env.object_pose(only)
@@ -142,18 +141,16 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
     """Perceive, plan, motion-plan and execute one grasp (:mod:`hsqbench.sim.trial`)."""
     cfg, rec = env.config, env.recorder
     trace = AttemptTrace()
-    t0 = time.perf_counter()
     try:
-        obs = env.observe()
+        look = env.look()
     except SimUnstable as exc:
         return Attempt(Outcome.SIM_UNSTABLE, detail=str(exc)), trace
+    obs, perception_s, truth = look.obs, look.perception_s, look.truth
     points = np.asarray(obs.points)
     trace.n_points = len(points)
-    perception_s = time.perf_counter() - t0
     if rec.enabled:
         rec.on_observation(obs)
-    truth = env.truth()
-    presented = _presented(env, trace, truth)
+    presented = _presented(env, trace, look.graspable)
     if len(points) < cfg.min_cloud_points and not getattr(planner, "privileged", False):
         detail = f"the cloud has {len(points)} points (fewer than {cfg.min_cloud_points})"
         attempt = Attempt(

@@ -3,6 +3,7 @@ bookkeeping of objects removed from it."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -19,15 +20,19 @@ from hsqbench.sim.robot import Panda
 from hsqbench.sim.surface_sensor import SurfaceSensor
 from hsqbench.sim.trial.config import TrialConfig
 from hsqbench.sim.trial.geometry import lift_height
+from hsqbench.sim.trial.presentation import CACHE, FirstLook, Look, Presentation, copied
 
 #: Independent random streams drawn from a trial's seed.
 STREAMS = ("perception_calibration", "perception_noise", "ik", "planner", "oracle")
+#: The streams a look draws from (:meth:`TrialEnv.look`), and nothing else does.
+LOOK_STREAMS = ("perception_calibration", "perception_noise", "oracle")
 
 
 class TrialEnv:
     """A built scene with everything an attempt needs (robot handles, IK, probe, sensor).
 
-    Build with :meth:`build`; close with :meth:`close` (frees the cameras' renderers).
+    Build with :meth:`build`; close with :meth:`close` (frees the cameras' renderers unless a
+    kept :class:`~hsqbench.sim.trial.presentation.Presentation` owns them).
     """
 
     def __init__(
@@ -39,6 +44,7 @@ class TrialEnv:
         config: TrialConfig,
         seed: int,
         recorder: Recorder,
+        presentation: Presentation | None = None,
     ) -> None:
         self.model, self.data, self.info = model, data, info
         self.assets = assets
@@ -72,8 +78,12 @@ class TrialEnv:
         )
         self.stepper = Stepper(model, data, self.panda, config.motion, recorder)
         self.removed: set[str] = set()
-        self._sensor: Any = None
+        self.presentation = presentation
+        self._sensor: Any = None if presentation is None else presentation.sensor
         self._oracle: Any = None
+        self._looked = False
+        #: Wall seconds this trial spent building its scene (a kept presentation: resetting it).
+        self.build_s = 0.0
 
     @classmethod
     def build(
@@ -84,10 +94,19 @@ class TrialEnv:
         config: TrialConfig,
         recorder: Recorder | None = None,
     ) -> TrialEnv:
-        from hsqbench.sim.scene import build_scene
-
         if isinstance(objects, str) or (objects is not None and not isinstance(objects, Sequence)):
             objects = [objects]
+        t0 = time.perf_counter()
+        rec = recorder if recorder is not None else NullRecorder()
+        key = None if rec.enabled else CACHE.key(kind, objects, seed)
+        kept = CACHE.get(key, config)
+        if kept is not None:
+            data = kept.fresh_data()
+            env = cls(kept.model, data, kept.info, kept.assets, config, seed, rec, kept)
+            env.build_s = time.perf_counter() - t0
+            return env
+        from hsqbench.sim.scene import build_scene
+
         resolved = None if objects is None else [resolve_object(o) for o in objects]
         model, data, info = build_scene(
             kind,
@@ -100,14 +119,18 @@ class TrialEnv:
         if resolved is None:
             resolved = [resolve_object(n) for n in info.objects]
         assets = {a.name: a for a in resolved}
-        rec = recorder if recorder is not None else NullRecorder()
-        env = cls(model, data, info, assets, config, seed, rec)
+        if key is not None:
+            kept = Presentation(key, config, model, info, assets)
+            CACHE.put(kept)
+        env = cls(model, data, info, assets, config, seed, rec, kept)
         if rec.enabled:
             rec.on_scene(model, data, info)
+        env.build_s = time.perf_counter() - t0
         return env
 
     def close(self) -> None:
-        if self._sensor is not None and hasattr(self._sensor, "close"):
+        owned = self.presentation is None or self.presentation.sensor is not self._sensor
+        if owned and self._sensor is not None and hasattr(self._sensor, "close"):
             self._sensor.close()
         self._sensor = None
 
@@ -143,10 +166,35 @@ class TrialEnv:
             self.model, self.info, rng=self.rngs["perception_calibration"], config=cfg.perception
         )
 
+    def look(self) -> Look:
+        """Perceive, then the true hulls and the graspability check (:class:`Look`). The first
+        look of a kept presentation is made once and handed to every later trial of it
+        (:mod:`hsqbench.sim.trial.presentation`)."""
+        kept, first = self.presentation, not self._looked
+        self._looked = True
+        if first and kept is not None and kept.first_look is not None:
+            # The data calls and draws that making the look makes, then the look itself.
+            mujoco.mj_forward(self.model, self.data)
+            mujoco.mj_kinematics(self.model, self.data)
+            for name, state in kept.first_look.states.items():
+                self.rngs[name].bit_generator.state = state
+            return copied(kept.first_look.look)
+        t0 = time.perf_counter()
+        obs = self.observe()
+        seconds = time.perf_counter() - t0
+        truth = self.truth()
+        look = Look(obs, seconds, truth, self.graspable_objects(truth))
+        if first and kept is not None:
+            states = {n: self.rngs[n].bit_generator.state for n in LOOK_STREAMS}
+            kept.first_look = FirstLook(copied(look), states)
+        return look
+
     def observe(self) -> Any:
         """The perceived cloud now (``points`` (N, 3), ``camera_positions`` (C, 3))."""
         if self._sensor is None:
             self._sensor = self._make_sensor()
+            if self.presentation is not None:
+                self.presentation.sensor = self._sensor
         if isinstance(self._sensor, SurfaceSensor):
             self._sensor.objects = {n: a for n, a in self.assets.items() if n not in self.removed}
         mujoco.mj_forward(self.model, self.data)

@@ -92,7 +92,7 @@ def run_isolated_trial(
     plan = resolve_planner(planner, cfg)
     with TrialEnv.build("isolated", object, seed, cfg, recorder) as env:
         attempt, trace = run_attempt(env, plan, packed=False)
-        trace.scene_build_s = env.info.build_time_s
+        trace.scene_build_s = env.build_s
         name = env.info.objects[0]
         settle_s, speed = env.info.settle_time_s, env.info.max_speed_after_settle
     if traces is not None:
@@ -141,7 +141,7 @@ def run_packed_round(
         while rule.stop_reason(outcomes, bool(env.objects_on_table())) is None:
             attempt, trace = run_attempt(env, plan, packed=True)
             if not attempts:
-                trace.scene_build_s = env.info.build_time_s
+                trace.scene_build_s = env.build_s
                 graspable = trace.graspable_objects
             attempts.append(attempt)
             outcomes.append(attempt.outcome.value)
