@@ -18,9 +18,7 @@ if TYPE_CHECKING:
     from hsqbench.experiment.config import ExperimentConfig
     from hsqbench.experiment.runner import RunSummary
 
-HELP = (
-    "run the experiments of a benchmark protocol with its planners (or yours) into runs/<run>/"
-)
+HELP = "run the experiments of a benchmark protocol with its planners (or yours) into runs/<run>/"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -73,7 +73,11 @@ def _mp_context() -> multiprocessing.context.BaseContext:
     # Workers fork from a server that has already imported the trial code and the planners'
     # heavy imports (scikit-learn, SciPy): cheap fresh pools.
     ctx.set_forkserver_preload(
-        ["hsqbench.experiment.backend", "hsqbench.sim.trial", "hsqbench.planner.hsq.stage_one.recovery"]
+        [
+            "hsqbench.experiment.backend",
+            "hsqbench.sim.trial",
+            "hsqbench.planner.hsq.stage_one.recovery",
+        ]
     )
     return ctx
 
