@@ -23,19 +23,6 @@ PACKAGE = Path(__file__).resolve().parents[1] / "hsqbench"
 MAX_MODULE_LINES = 400
 MAX_FUNCTION_LINES = 60
 
-#: Cycles that another issue removes; each entry is the set of modules that import each other.
-KNOWN_CYCLES: list[set[str]] = []
-#: Modules over the size limit before the limit had a test: their size today is their ceiling,
-#: so they may shrink (then lower or drop the entry) but not grow.
-OVERSIZED_MODULES = {
-    "hsqbench/viz/rerun_recorder.py": 423,
-}
-#: Functions over the limit before the limit had a test, with their length today as ceiling.
-LONG_FUNCTIONS = {
-    "hsqbench/commands/sweep.py:add_arguments": 73,
-    "hsqbench/planner/hsq/stage_two/elimination.py:eliminate": 71,
-}
-
 
 def module_names(root: Path) -> dict[str, Path]:
     """Dotted name -> file of every module under ``root`` (a package folder)."""
@@ -134,9 +121,9 @@ def _describe(component: set[str], graph: dict[str, set[str]]) -> str:
 
 def test_no_module_imports_itself_through_others() -> None:
     graph = import_graph(PACKAGE)
-    new = [c for c in cycles(graph) if not any(c <= known for known in KNOWN_CYCLES)]
-    assert not new, "import cycles (move the shared names below both modules): " + " | ".join(
-        _describe(c, graph) for c in new
+    found = cycles(graph)
+    assert not found, "import cycles (move the shared names below both modules): " + " | ".join(
+        _describe(c, graph) for c in found
     )
 
 
@@ -205,29 +192,10 @@ def test_modules_and_functions_stay_small() -> None:
     for path in sorted(PACKAGE.rglob("*.py")):
         rel = path.relative_to(PACKAGE.parent).as_posix()
         n_lines = len(path.read_text().splitlines())
-        if n_lines > OVERSIZED_MODULES.get(rel, MAX_MODULE_LINES):
+        if n_lines > MAX_MODULE_LINES:
             too_long.append(f"{rel}: {n_lines} lines (at most {MAX_MODULE_LINES})")
         for name, length in _function_lengths(path).items():
             key = f"{rel}:{name}"
-            if length > LONG_FUNCTIONS.get(key, MAX_FUNCTION_LINES):
+            if length > MAX_FUNCTION_LINES:
                 too_long.append(f"{key}: {length} lines (at most {MAX_FUNCTION_LINES})")
     assert not too_long, "split these: " + "; ".join(too_long)
-
-
-def test_the_exceptions_name_things_that_still_exist() -> None:
-    """An exception for a module or function that was renamed or split must go."""
-    lengths = {
-        f"{p.relative_to(PACKAGE.parent).as_posix()}:{name}": n
-        for p in PACKAGE.rglob("*.py")
-        for name, n in _function_lengths(p).items()
-    }
-    stale = [
-        m
-        for m in OVERSIZED_MODULES
-        if not (PACKAGE.parent / m).is_file()
-        or len((PACKAGE.parent / m).read_text().splitlines()) <= MAX_MODULE_LINES
-    ]
-    stale += [f for f in LONG_FUNCTIONS if lengths.get(f, 0) <= MAX_FUNCTION_LINES]
-    known = module_names(PACKAGE)
-    stale += [m for cycle in KNOWN_CYCLES for m in sorted(cycle) if m not in known]
-    assert not stale, f"drop these exceptions (gone or within the limits now): {stale}"

@@ -18,7 +18,7 @@ from hsqbench.sim.recorder import Recorder
 from hsqbench.viz.colors import NO_SCORE_COLOR, REASON_COLORS, score_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
 from hsqbench.viz.gripper_outline import gripper_outline
-from hsqbench.viz.rerun_recorder import RerunRecorder, camera_entity_name, depth_image
+from hsqbench.viz.rerun_recorder import RerunRecorder
 from hsqbench.viz.rrd import read_recording
 from hsqbench.viz.scene_geometry import body_meshes
 
@@ -284,29 +284,6 @@ def test_gripper_outline_in_the_grasp_frame():
     assert closing[:, 0] == pytest.approx([-width / 2, width / 2])
     with pytest.raises(ValueError, match="opening_m"):
         gripper_outline(grip, p, R, float("nan"), 0.05)
-
-
-def _buffer(image, dtype) -> np.ndarray:
-    raw = image.buffer.as_arrow_array().to_pylist()[0]
-    return np.frombuffer(np.asarray(raw, dtype=np.uint8).tobytes(), dtype=dtype)
-
-
-def test_depth_image_quantises_to_the_unit_and_falls_back_to_float():
-    import rerun as rr
-
-    depth = np.array([[0.0, 0.5], [1.23456, 3.8]], dtype=np.float32)
-    img = depth_image(rr, depth, 1e-4)
-    buf = _buffer(img, np.uint16)
-    assert buf.reshape(2, 2) * 1e-4 == pytest.approx(depth, abs=0.5e-4)
-    assert buf[0] == 0  # invalid stays invalid
-    far = depth_image(rr, np.array([[7.0]], dtype=np.float32), 1e-4)  # beyond 6.5535 m
-    assert _buffer(far, np.float32)[0] == 7.0
-
-
-def test_camera_entity_name():
-    assert camera_entity_name("cam_left") == "left"
-    assert camera_entity_name("overhead") == "overhead"
-    assert camera_entity_name("cam_") == "cam_"
 
 
 def _spec_model() -> mujoco.MjModel:

@@ -19,6 +19,13 @@ HELP = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    _add_sweeps(parser)
+    _add_scope(parser)
+    _add_execution(parser)
+
+
+def _add_sweeps(parser: argparse.ArgumentParser) -> None:
+    """What to sweep: sweep configs, or one ad hoc parameter with its protocols and experiments."""
     parser.add_argument(
         "sweeps",
         nargs="*",
@@ -51,6 +58,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=["isolated"],
         help="with --param: the experiments (default isolated)",
     )
+
+
+def _add_scope(parser: argparse.ArgumentParser) -> None:
+    """What runs at each point (attempts, planners, seeds, parameters) and where results go."""
     parser.add_argument(
         "--attempts-per-object",
         type=positive_int,
@@ -83,7 +94,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="sweep folder under runs/ or a path (default runs/sweeps); rerunning resumes",
     )
-    _add_execution(parser)
 
 
 def _add_execution(parser: argparse.ArgumentParser) -> None:

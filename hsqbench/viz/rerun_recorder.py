@@ -32,7 +32,9 @@ When each is logged: the scene and the initial poses in ``on_scene``; cameras, d
 ``on_observation``; superquadrics, candidates and top grasps in ``on_plan``; the chosen grasp in
 ``on_grasp``; poses and the gripper width are buffered in ``on_step`` (a copy of a few arrays)
 and sent as columns in ``on_outcome`` and :meth:`RerunRecorder.close`, so stepping stays cheap.
-In a packed round the planner's entities are cleared at each new observation.
+In a packed round the planner's entities are cleared at each new observation. What each hook logs
+lives beside this module: the scene in :mod:`~hsqbench.viz.rerun_scene`, each camera in
+:mod:`~hsqbench.viz.rerun_cameras`, the plan in :mod:`~hsqbench.viz.rerun_plan`.
 
 Off is free: the trial runner never calls a recorder whose ``enabled`` is False, and this module
 (and ``rerun``) is only imported when ``--rerun`` asks for a recording.
@@ -47,62 +49,21 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from hsqbench.viz.blueprint import episode_blueprint
 from hsqbench.viz.colors import camera_colors
 from hsqbench.viz.config import ViewerConfig, load_viewer_config
 from hsqbench.viz.gripper_outline import gripper_outline
+from hsqbench.viz.rerun_cameras import log_camera
 from hsqbench.viz.rerun_plan import (
     _best_scores,
     _log_plan_geometry,
     _log_superquadrics,
     _log_top_grasps,
 )
-from hsqbench.viz.scene_geometry import BodyMesh, body_meshes
+from hsqbench.viz.rerun_scene import log_scene
 
 TIMELINE = "sim_time"
 CHOSEN_COLOR = (255, 255, 255, 255)
-WORKSPACE_COLOR = (200, 200, 200, 255)
 CLOUD_COLOR = (230, 230, 230, 255)
-
-
-def _floor_centre(info: Any) -> NDArray[np.float64] | None:
-    """The middle of the workspace's floor (where the objects stand), or None."""
-    if not hasattr(info, "workspace_min"):
-        return None
-    lo, hi = np.asarray(info.workspace_min, float), np.asarray(info.workspace_max, float)
-    return np.array([*(0.5 * (lo[:2] + hi[:2])), lo[2]])
-
-
-def _layout(model: mujoco.MjModel, data: mujoco.MjData, info: Any) -> Any:
-    """The episode's default layout (:mod:`hsqbench.viz.blueprint`), its eye on the side of the
-    camera named first."""
-    cameras = sorted(getattr(info, "depth_cameras", ()), key=lambda c: camera_entity_name(c.name))
-    first = None
-    if cameras and hasattr(info, "workspace_min"):  # the settled scene's kinematics are current
-        first = data.cam_xpos[model.camera(cameras[0].name).id].copy()
-    names = [camera_entity_name(c.name) for c in cameras]
-    return episode_blueprint(names, first, _floor_centre(info))
-
-
-def camera_entity_name(name: str) -> str:
-    """Entity name of a camera: the MuJoCo name without a ``cam_`` prefix (``cam_left`` ->
-    ``left``)."""
-    return name[4:] if name.startswith("cam_") and len(name) > 4 else name
-
-
-def _part(name: str) -> str:
-    import rerun as rr
-
-    return rr.escape_entity_path_part(name)
-
-
-def depth_image(rr: Any, depth_m: NDArray, unit_m: float) -> Any:
-    """A ``DepthImage`` of ``depth_m`` (metres, 0 = invalid) stored as uint16 multiples of
-    ``unit_m`` (half the bytes of float32), or as float32 if a depth would not fit in 16 bits."""
-    depth = np.asarray(depth_m, dtype=np.float32)
-    if depth.size and float(depth.max()) < 65535 * unit_m:
-        return rr.DepthImage(np.round(depth / unit_m).astype(np.uint16), meter=1.0 / unit_m)
-    return rr.DepthImage(depth, meter=1.0)
 
 
 class RerunRecorder:
@@ -172,79 +133,16 @@ class RerunRecorder:
     def _event(self, text: str, level: str = "INFO") -> None:
         self.rec.log("events", self._rr.TextLog(text, level=level))
 
-    def _body_path(self, model: mujoco.MjModel, info: Any, body: int) -> str:
-        name = model.body(body).name
-        objects = {int(v): k for k, v in getattr(info, "object_body_ids", {}).items()}
-        if body in objects:
-            return f"world/objects/{_part(objects[body])}"
-        prefix = getattr(info, "robot_prefix", "")
-        if prefix and name.startswith(prefix):
-            return f"world/robot/{_part(name[len(prefix) :])}"
-        return f"world/bodies/{_part(name or str(body))}"
-
-    def _mesh(self, mesh: BodyMesh) -> Any:
-        return self._rr.Mesh3D(
-            vertex_positions=mesh.vertices,
-            triangle_indices=mesh.faces,
-            vertex_colors=mesh.colors,
-            vertex_normals=mesh.normals,
-        )
-
     # ---- Recorder protocol ---------------------------------------------------------------------
     def on_scene(self, model: mujoco.MjModel, data: mujoco.MjData, info: Any) -> None:
         """Static geometry, the initial poses and a description of the scene."""
-        rr, cfg = self._rr, self.config
         self._data = data
-        kind, objects = getattr(info, "kind", "?"), list(getattr(info, "objects", []))
-        seed = getattr(info, "seed", "?")
-        self.rec.send_recording_name(f"{kind} {' '.join(objects)} seed {seed}")
-        self.rec.send_blueprint(_layout(model, data, info))
-        self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-        self.rec.log(
-            "scene",
-            rr.TextDocument(
-                f"**{kind}** scene, seed {seed}\n\nobjects: {', '.join(objects) or '-'}",
-                media_type=rr.MediaType.MARKDOWN,
-            ),
-            static=True,
-        )
-        if hasattr(info, "workspace_min"):
-            lo, hi = np.asarray(info.workspace_min, float), np.asarray(info.workspace_max, float)
-            self.rec.log(
-                "world/workspace",
-                rr.Boxes3D(mins=[lo], sizes=[hi - lo], colors=[WORKSPACE_COLOR], radii=0.001),
-                static=True,
-            )
-
-        meshes = body_meshes(
-            model, groups=cfg.geom_groups, max_faces_per_geom=cfg.max_faces_per_geom
-        )
-        hulls = (
-            body_meshes(model, groups=(3,), max_faces_per_geom=cfg.max_faces_per_geom)
-            if cfg.collision_geoms
-            else {}
-        )
-        for body in sorted(set(meshes) | set(hulls)):
-            path = "world/scene" if body == 0 else self._body_path(model, info, body)
-            if body in meshes:
-                self.rec.log(path, self._mesh(meshes[body]), static=True)
-            if body in hulls:
-                self.rec.log(f"{path}/collision_geoms", self._mesh(hulls[body]), static=True)
-            if body == 0:
-                continue
-            if int(model.body_weldid[body]) == 0:  # welded to the world: one static pose
-                self.rec.log(
-                    path,
-                    rr.Transform3D(
-                        translation=data.xpos[body], mat3x3=data.xmat[body].reshape(3, 3)
-                    ),
-                    static=True,
-                )
-            else:
-                self._tracked[body] = path
+        self._tracked.update(log_scene(self.rec, self._rr, self.config, model, data, info))
         fingers = [model.joint(n).id for n in getattr(info, "finger_joints", ())]
         self._finger_adr = np.asarray(model.jnt_qposadr[fingers], dtype=np.int64)
         self._at_now()
+        kind, objects = getattr(info, "kind", "?"), list(getattr(info, "objects", []))
+        seed = getattr(info, "seed", "?")
         self._event(f"scene: {kind}, seed {seed}, objects {', '.join(objects) or '-'}")
         self._sample(data)
 
@@ -265,7 +163,7 @@ class RerunRecorder:
         self.rec.log("world/cloud", rr.Points3D(points, colors=colors, radii=cfg.cloud_radius_m))
         if cams is not None:
             for cam in cams:
-                self._log_camera(cam)
+                log_camera(self.rec, rr, cam, cfg.depth_unit_m)
         else:
             positions = np.asarray(getattr(observation, "camera_positions", np.zeros((0, 3))))
             self.rec.log(
@@ -273,25 +171,6 @@ class RerunRecorder:
                 rr.Points3D(positions.reshape(-1, 3), radii=0.02, labels=None),
             )
         self._event(f"attempt {self._attempt}: perceived {len(points)} points")
-
-    def _log_camera(self, cam: Any) -> None:
-        rr = self._rr
-        path = f"world/cameras/{_part(camera_entity_name(cam.name))}"
-        T = np.asarray(cam.T_world_camera, dtype=np.float64)
-        K = np.asarray(cam.K, dtype=np.float64).copy()
-        K[0, 2] += 0.5  # Rerun puts integer pixel coordinates at pixel corners
-        K[1, 2] += 0.5
-        self.rec.log(path, rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3]))
-        self.rec.log(
-            path,
-            rr.Pinhole(
-                image_from_camera=K,
-                resolution=[int(cam.width_px), int(cam.height_px)],
-                camera_xyz=rr.ViewCoordinates.RDF,
-                image_plane_distance=0.1,
-            ),
-        )
-        self.rec.log(f"{path}/depth", depth_image(self._rr, cam.depth_m, self.config.depth_unit_m))
 
     def on_plan(self, plan: Any) -> None:
         """Hidden superquadrics, candidates by fate, and the best grasps."""

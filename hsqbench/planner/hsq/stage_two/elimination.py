@@ -253,6 +253,86 @@ def _collision_hits(
     return body_hits(points, cands, lines, body, radius, half_height, tolerated)
 
 
+class _Fates:
+    """The fate of every (line, roll) while the rules run: ``code[line, roll]`` is 0 while kept,
+    else 1 + the index in ``REJECTION_REASONS`` of the first rule that removed it; ``remaining``:
+    the candidates left after each rule, in the order the rules ran."""
+
+    def __init__(self, cands: CandidateSet) -> None:
+        self.code = np.zeros((len(cands.lines), cands.n_roll), dtype=np.int8)
+        self.remaining = {"synthesised": len(cands)}
+
+    def apply(self, rule: str, lines: NDArray[np.int64], hit: NDArray[np.bool_]) -> None:
+        """Mark rolls ``hit`` (len(lines), R) or whole lines (hit (len(lines),)) as removed."""
+        block = self.code[lines]
+        mask = hit if hit.ndim == 2 else np.broadcast_to(hit[:, None], block.shape)
+        block[(block == 0) & mask] = 1 + REJECTION_REASONS.index(rule)
+        self.code[lines] = block
+        self.skip(rule)
+
+    def skip(self, rule: str) -> None:
+        """Record a rule that did not run (it removed nothing)."""
+        self.remaining[rule] = int(np.count_nonzero(self.code == 0))
+
+    def alive_lines(self) -> NDArray[np.int64]:
+        """Lines with at least one roll still kept."""
+        return np.flatnonzero(np.any(self.code == 0, axis=1))
+
+    def rejected_by(self, dtype: np.dtype) -> NDArray:
+        """(N,): each candidate's fate, ``KEPT`` or the rule that removed it."""
+        names = np.array((KEPT, *REJECTION_REASONS), dtype=dtype)
+        return names[self.code.ravel()]
+
+
+def _line_rules(
+    fates: _Fates,
+    lines: ClosingLines,
+    gripper: GripperModel,
+    config: GraspConfig,
+    line_priority: NDArray | None,
+) -> None:
+    """Rules 0 and 1, on whole lines: ``duplicate`` and ``width``."""
+    all_lines = np.arange(len(lines))
+    priority = np.zeros(len(lines)) if line_priority is None else np.asarray(line_priority, float)
+    fates.apply("duplicate", all_lines, duplicate_lines(lines, priority, config))
+    too_wide = 2.0 * lines.half_lengths > gripper.max_opening_m - config.opening_margin_m
+    fates.apply("width", all_lines, too_wide)
+
+
+def _obstacle_rules(
+    fates: _Fates,
+    points: NDArray,
+    cands: CandidateSet,
+    gripper: GripperModel,
+    config: GraspConfig,
+    body_points: NDArray | Callable[[], NDArray] | None,
+) -> None:
+    """Rules 4 to 6 (``collision``, ``sweep``, ``hidden``) on the lines still alive; rule 6 runs
+    only with ``body_points`` (None: it removes nothing)."""
+    openings = cands.lines.openings
+    tolerated = config.max_obstacle_points
+    # The paper's obstacles: between the end planes, outside radius l_j.
+    lines = fates.alive_lines()
+    fates.apply(
+        "collision", lines, _collision_hits(points, cands, lines, gripper, openings, tolerated)
+    )
+    if config.sweep_rule:
+        lines = fates.alive_lines()
+        swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
+        fates.apply("sweep", lines, body_hits(points, cands, lines, swept, max_points=tolerated))
+    else:
+        fates.skip("sweep")
+    lines = fates.alive_lines()
+    if body_points is not None and lines.size:
+        obstacles = body_points() if callable(body_points) else body_points
+        swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
+        fates.apply(
+            "hidden", lines, body_hits(obstacles, cands, lines, swept, max_points=tolerated)
+        )
+    else:
+        fates.skip("hidden")
+
+
 def eliminate(
     cands: CandidateSet,
     points: NDArray,
@@ -273,74 +353,34 @@ def eliminate(
     body_obstacles`), or a function returning them, called only if a candidate reaches rule 6;
     None: the rule removes nothing.
     """
-    n_roll = cands.n_roll
     L = cands.lines
-    # code[line, roll]: 0 while kept, else 1 + the index of the rule that removed it.
-    code = np.zeros((len(L), n_roll), dtype=np.int8)
-    remaining = {"synthesised": len(cands)}
+    fates = _Fates(cands)
     points = voxel_downsample(points, config.elimination_voxel_m).points
-
-    def apply(rule: str, lines: NDArray[np.int64], hit: NDArray[np.bool_]) -> None:
-        """Mark rolls ``hit`` (len(lines), R) or whole lines (hit (len(lines),)) as removed."""
-        block = code[lines]
-        mask = hit if hit.ndim == 2 else np.broadcast_to(hit[:, None], block.shape)
-        block[(block == 0) & mask] = 1 + REJECTION_REASONS.index(rule)
-        code[lines] = block
-        remaining[rule] = int(np.count_nonzero(code == 0))
-
-    def alive_lines() -> NDArray[np.int64]:
-        return np.flatnonzero(np.any(code == 0, axis=1))
-
-    all_lines = np.arange(len(L))
-    priority = np.zeros(len(L)) if line_priority is None else np.asarray(line_priority, float)
-    apply("duplicate", all_lines, duplicate_lines(L, priority, config))
-    apply(
-        "width", all_lines, 2.0 * L.half_lengths > gripper.max_opening_m - config.opening_margin_m
-    )
+    _line_rules(fates, L, gripper, config, line_priority)
 
     spacing = cloud_spacing(points, seed)
     kappa = support_kappa(spacing, config)
-    lines = alive_lines()
+    lines = fates.alive_lines()
     # Rule 6 replaces the facing test where it runs (see the module docstring).
     bodies = config.body_rule and body_points is not None
     ok = _supported(
         points, cands, lines, config, kappa, camera_positions, support_plane, facing=not bodies
     )
-    apply("support", lines, ~ok)
+    fates.apply("support", lines, ~ok)
 
-    openings = approach_openings(L.half_lengths, gripper, config)
-    L.openings = openings
-    lines = alive_lines()
-    swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
+    L.openings = approach_openings(L.half_lengths, gripper, config)
+    lines = fates.alive_lines()
     if support_plane is not None:
+        swept = line_boxes(gripper, L.openings[lines], config.approach_distance_m)
         plane = np.asarray(support_plane, float)
-        apply("table", lines, ~table_clear(cands, lines, swept, plane, config.table_clearance_m))
+        fates.apply(
+            "table", lines, ~table_clear(cands, lines, swept, plane, config.table_clearance_m)
+        )
     else:
-        remaining["table"] = remaining["support"]
+        fates.skip("table")
 
-    # The paper's obstacles: between the end planes, outside radius l_j.
-    lines = alive_lines()
-    tolerated = config.max_obstacle_points
-    hits = _collision_hits(points, cands, lines, gripper, openings, tolerated)
-    apply("collision", lines, hits)
-
-    if config.sweep_rule:
-        lines = alive_lines()
-        swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
-        apply("sweep", lines, body_hits(points, cands, lines, swept, max_points=tolerated))
-    else:
-        remaining["sweep"] = remaining["collision"]
-
-    lines = alive_lines()
-    if bodies and lines.size:
-        obstacles = body_points() if callable(body_points) else body_points
-        swept = line_boxes(gripper, openings[lines], config.approach_distance_m)
-        apply("hidden", lines, body_hits(obstacles, cands, lines, swept, max_points=tolerated))
-    else:
-        remaining["hidden"] = remaining["sweep"]
-
-    names = np.array((KEPT, *REJECTION_REASONS), dtype=cands.rejected_by.dtype)
-    cands.rejected_by = names[code.ravel()]
+    _obstacle_rules(fates, points, cands, gripper, config, body_points if bodies else None)
+    cands.rejected_by = fates.rejected_by(cands.rejected_by.dtype)
     return EliminationReport(
-        remaining=remaining, kappa=kappa, spacing_m=spacing, n_points=points.shape[0]
+        remaining=fates.remaining, kappa=kappa, spacing_m=spacing, n_points=points.shape[0]
     )
