@@ -113,6 +113,18 @@ def test_planners_lists_each_planner_on_one_line(tmp_path, monkeypatch, capsys):
     assert "plugged in" in lines["mine-listed"] and str(spec.resolve()) in lines["mine-listed"]
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [["benchmark"], ["ablate"], ["sweep", "cameras"]],
+    ids=["benchmark", "ablate", "sweep"],
+)
+def test_every_command_that_runs_trials_takes_the_same_executor_options(argv):
+    args = build_parser().parse_args([*argv, "--executor", "ray", "--address", "auto"])
+    assert (args.executor, args.address) == ("ray", "auto")
+    with pytest.raises(SystemExit):
+        build_parser().parse_args([*argv, "--executor", "threads"])
+
+
 def test_positive_int_accepts_whole_numbers_from_one():
     assert _options.positive_int("3") == 3
     for bad in ("0", "-2", "1.5"):

@@ -69,6 +69,25 @@ def add_jobs(
     )
 
 
+def add_executor(parser: argparse.ArgumentParser) -> None:
+    """``--executor`` and ``--address``: where the trials run, alike in every command that runs
+    trials."""
+    parser.add_argument(
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
+    )
+    parser.add_argument(
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="with --executor ray: join the Ray cluster at ADDR (HOST:PORT printed by `ray start "
+        "--head`, or auto) instead of starting a local one; its nodes need hsqbench and the "
+        "same HSQ_* paths",
+    )
+
+
 def add_protocol(parser: argparse.ArgumentParser, default: str = "paper") -> None:
     """``--protocol NAME`` (old spelling ``--config``)."""
     parser.add_argument(

@@ -12,7 +12,13 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, add_protocol, protocol_of
+from hsqbench.commands._options import (
+    PLANNER_SPEC_HELP,
+    add_executor,
+    add_jobs,
+    add_protocol,
+    protocol_of,
+)
 
 HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions off in turn"
 
@@ -39,12 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"other planners to run alongside, e.g. antipodal: {PLANNER_SPEC_HELP}",
     )
     add_jobs(parser)
-    parser.add_argument(
-        "--executor",
-        choices=("local", "ray"),
-        default="local",
-        help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
-    )
+    add_executor(parser)
     parser.add_argument(
         "--experiments",
         nargs="+",
@@ -125,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         summary = run_benchmark(
             config,
             run_dir,
-            executor=make_executor(args.executor, args.jobs),
+            executor=make_executor(args.executor, args.jobs, args.address),
             experiments=args.experiments,
             resume=args.resume,
             force=args.force,

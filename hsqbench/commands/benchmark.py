@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
+    add_executor,
     add_jobs,
     add_protocol,
     positive_int,
@@ -30,20 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="run name under runs/ (or a folder path); default <protocol>-<UTC time>",
     )
     add_jobs(parser)
-    parser.add_argument(
-        "--executor",
-        choices=("local", "ray"),
-        default="local",
-        help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
-    )
-    parser.add_argument(
-        "--address",
-        default=None,
-        metavar="ADDR",
-        help="with --executor ray: join the Ray cluster at ADDR (HOST:PORT printed by `ray start "
-        "--head`, or auto) instead of starting a local one; its nodes need hsqbench and the "
-        "same HSQ_* paths",
-    )
+    add_executor(parser)
     parser.add_argument(
         "--planners",
         nargs="+",

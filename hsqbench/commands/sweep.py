@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from hsqbench.experiment.sweep_config import SweepConfig
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, add_jobs, positive_int
+from hsqbench.commands._options import PLANNER_SPEC_HELP, add_executor, add_jobs, positive_int
 
 HELP = (
     "robustness sweeps: run a protocol at each value of config parameters (depth noise, "
@@ -99,12 +99,7 @@ def _add_scope(parser: argparse.ArgumentParser) -> None:
 def _add_execution(parser: argparse.ArgumentParser) -> None:
     """How the sweep runs: workers, executor, errors, report only."""
     add_jobs(parser)
-    parser.add_argument(
-        "--executor",
-        choices=("local", "ray"),
-        default="local",
-        help="local process pool, or Ray (pip install -e '.[ray]'; same results)",
-    )
+    add_executor(parser)
     parser.add_argument(
         "--retry-errors", action="store_true", help="run again trials recorded as errors"
     )
@@ -204,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
 
         args.planners = resolve_planners(args.planners)
     sweeps = _sweeps(args)
-    executor = make_executor(args.executor, args.jobs)
+    executor = make_executor(args.executor, args.jobs, args.address)
     errors = 0
     try:
         for sweep in sweeps:
