@@ -9,7 +9,7 @@ from hsqbench.config import ConfigError, from_dict
 from hsqbench.experiment.canonical import Canonical, load_canonical, main, make_results
 from hsqbench.experiment.config import load_experiment_config
 from hsqbench.experiment.results import ResultStore
-from hsqbench.settings import CONFIG_DIR
+from hsqbench.settings import SWEEP_DIR
 from tests.fake_backend import FakeBackend
 
 
@@ -20,7 +20,7 @@ def test_every_canonical_run_names_a_protocol_with_its_experiments():
         config = load_experiment_config(run.config)
         assert set(run.experiments) <= set(config.enabled_experiments()), run.name
     for name in canon.sweeps.parameters:
-        assert (CONFIG_DIR / "sweeps" / f"{name}.yaml").is_file(), name
+        assert (SWEEP_DIR / f"{name}.yaml").is_file(), name
     assert 60 * 6 < canon.expected_min() < 60 * 16  # the documented "about 10 h"
 
 

@@ -27,10 +27,10 @@ def git_ignored(path: Path) -> bool:
 
 def test_benchmark_and_sweep_run_folders_are_git_ignored():
     from hsqbench.cli import build_parser
-    from hsqbench.commands.benchmark import _run_dir
+    from hsqbench.runs import run_folder
 
-    named = _run_dir("mine", "quick")
-    dated = _run_dir(None, "quick")
+    named = run_folder("mine", "quick")
+    dated = run_folder(None, "quick")
     sweep_default = build_parser().parse_args(["sweep", "depth_noise"]).run
     for folder in (named, dated, RESULTS_DIR / sweep_default):
         assert folder.is_relative_to(REPO_ROOT)
