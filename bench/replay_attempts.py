@@ -33,7 +33,7 @@ from hsqbench.sim.trial import load_trial_config, run_isolated_trial
 
 
 def add_selection_args(p: argparse.ArgumentParser) -> None:
-    """The attempt filters this script and ``bench/grasp_clearance.py`` share."""
+    """The attempt filters of this script (and of replay_rounds.py)."""
     p.add_argument("runs", nargs="+", type=Path)
     p.add_argument("--detail", default="", help="substring of the attempt's detail")
     p.add_argument("--outcome", default="", help="only attempts with this recorded outcome")
