@@ -1,10 +1,12 @@
 """Re-executing recorded grasps (hsqbench.experiment.replay, ``hsqbench replay``): a grasp
 recorded in attempts.csv, executed again in its scene without planning, ends as recorded; the
 replay executes the recorded pose (moved, it ends differently); rows without the grasp columns
-are refused with the fix."""
+are refused with the fix; ``--replan`` plans again and ends as recorded; the filters choose the
+trials (isolated attempts, packed rounds) they name."""
 
 from __future__ import annotations
 
+import csv
 import json
 from dataclasses import replace
 
@@ -17,9 +19,11 @@ from hsqbench.experiment.backend import TrialRun
 from hsqbench.experiment.replay import (
     RecordedGrasps,
     ReplayError,
+    TrialFilter,
     recorded_grasp,
     replay_trial,
     run_rows,
+    select_trials,
     trial_rows,
 )
 from hsqbench.experiment.results import RUN_FILE, ResultStore
@@ -90,9 +94,87 @@ def test_cli_refuses_unknown_trials_and_bad_settings(run_dir, capsys):
     assert "no finished trial matches" in capsys.readouterr().err
 
 
+def test_cli_replans_and_writes_the_comparison(run_dir, tmp_path, capsys):
+    out = tmp_path / "replay.csv"
+    assert (
+        main(["replay", str(run_dir), "--replan", "--detail", "in the bin", "--out", str(out)]) == 0
+    )
+    text = capsys.readouterr().out
+    assert f"{KEY} #0: success -> success (" in text and " ~" not in text
+    assert "1 of 1 replayed attempts ended as recorded" in text and f"wrote {out}" in text
+    [row] = list(csv.DictReader(out.open()))
+    assert (row["trial_key"], row["recorded"], row["replayed"], row["exact"]) == (
+        KEY,
+        "success",
+        "success",
+        "1",
+    )
+
+
+def test_cli_refuses_filters_that_match_nothing_and_a_missing_out_folder(run_dir, capsys):
+    assert main(["replay", str(run_dir), "--detail", "no such detail"]) == 2
+    assert "no finished trial matches" in capsys.readouterr().err
+    assert main(["replay", str(run_dir), "--failed-graspable"]) == 2  # its one attempt succeeded
+    assert "no finished trial matches" in capsys.readouterr().err
+    assert main(["replay", str(run_dir), "--out", "/nonexistent/dir/x.csv"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def _row(experiment, planner, seed, index, attempt, outcome, graspable, detail=""):
+    key = f"{experiment}/{planner}/s{seed}/{'mug/' if experiment == 'isolated' else ''}{index:03d}"
+    return {
+        "trial_key": key,
+        "experiment": experiment,
+        "planner": planner,
+        "attempt_index": str(attempt),
+        "status": "ok",
+        "outcome": outcome,
+        "success": "1" if outcome == "success" else "0",
+        "graspable": str(graspable),
+        "detail": detail or ("in the bin" if outcome == "success" else "fell off"),
+    }
+
+
+ROWS = [
+    _row("packed", "hsq", 0, 0, 0, "success", 1),  # all well
+    _row("packed", "hsq", 0, 0, 1, "success", 1),
+    _row("packed", "hsq", 0, 1, 0, "success", 1),
+    _row("packed", "hsq", 0, 1, 1, "dropped", 1, "slipped: not in the bin"),  # graspable failure
+    _row("packed", "hsq", 1, 0, 0, "dropped", 0),  # a failure on an ungraspable presentation
+    _row("packed", "antipodal", 0, 1, 0, "dropped", 1),
+    _row("isolated", "hsq", 0, 0, 0, "dropped", 1, "slipped: not in the bin"),
+    {**_row("isolated", "hsq", 0, 1, 0, "dropped", 1), "status": "error"},  # did not run
+]
+
+
+def test_trials_are_chosen_once_each_in_run_order():
+    assert select_trials(ROWS, TrialFilter()) == [
+        "packed/hsq/s0/000",
+        "packed/hsq/s0/001",
+        "packed/hsq/s1/000",
+        "packed/antipodal/s0/001",
+        "isolated/hsq/s0/mug/000",
+    ]
+
+
+def test_filters_choose_by_planner_outcome_and_detail():
+    assert select_trials(ROWS, TrialFilter(planner="antipodal")) == ["packed/antipodal/s0/001"]
+    dropped = select_trials(ROWS, TrialFilter(outcome="dropped", planner="hsq"))
+    assert dropped == ["packed/hsq/s0/001", "packed/hsq/s1/000", "isolated/hsq/s0/mug/000"]
+    by_detail = select_trials(ROWS, TrialFilter(detail="not in the bin"))
+    assert by_detail == ["packed/hsq/s0/001", "isolated/hsq/s0/mug/000"]
+
+
+def test_failed_graspable_ignores_ungraspable_failures():
+    chosen = select_trials(ROWS, TrialFilter(planner="hsq", failed_graspable=True))
+    assert chosen == ["packed/hsq/s0/001", "isolated/hsq/s0/mug/000"]
+    everyone = select_trials(ROWS, TrialFilter(failed_graspable=True))
+    assert everyone == ["packed/hsq/s0/001", "packed/antipodal/s0/001", "isolated/hsq/s0/mug/000"]
+
+
 def test_rows_of_runs_before_the_grasp_columns_are_refused():
     row = {"trial_key": KEY, "attempt_index": "0", "outcome": "dropped", "grasp_pose": ""}
-    with pytest.raises(ReplayError, match=r"no grasp_pose: .* bench/replay_attempts\.py"):
+    with pytest.raises(ReplayError, match=r"no grasp_pose: .*`hsqbench replay RUN --replan`"):
         recorded_grasp(row)
     assert recorded_grasp({**row, "outcome": "no_grasp_found"}) is None
 

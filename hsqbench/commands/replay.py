@@ -1,4 +1,5 @@
-"""``hsqbench replay RUN``: re-execute recorded grasps of a benchmark run, without planning."""
+"""``hsqbench replay RUN``: re-execute recorded grasps of a benchmark run without planning, or
+(``--replan``) plan them again with the run's planner; either way compare with the record."""
 
 from __future__ import annotations
 
@@ -6,24 +7,27 @@ import argparse
 from collections import Counter
 from pathlib import Path
 
-HELP = "re-execute grasps recorded in a run's attempts.csv (no planning) and compare outcomes"
+HELP = "replay a run's attempts (recorded grasps, or --replan) and compare with attempts.csv"
 
 _EPILOG = """\
 Each chosen trial is set up again from its seed and objects with the run's trial config
 (run.json), and its attempts execute the grasps that attempts.csv recorded (grasp_pose,
 grasp_flipped, width_m) instead of asking the planner. A packed or pile round is replayed from
-its first attempt up to --attempt. Each replayed attempt is printed as
-`KEY #I: RECORDED -> REPLAYED (detail)`.
+its first attempt up to --attempt. With --replan the trial's planner plans again at the
+recorded seed instead (a change of the planner or the perception shows). Each replayed attempt
+is printed as `KEY #I: RECORDED -> REPLAYED (detail)`, then the transitions are counted.
 
 Examples:
   hsqbench replay runs/quick --trial isolated/hsq/s0/mug/000
   hsqbench replay runs/quick --outcome dropped --limit 5 --set execution.release_height_m=0.01
   hsqbench replay runs/quick --trial packed/hsq/s0/003 --attempt 2 --rerun round.rrd
+  hsqbench replay runs/quick --replan --detail "not in the bin" --limit 50 --out turned.csv
+  hsqbench replay runs/pile --replan --planner hsq --failed-graspable --limit 20
 
 The replay is exact when the executed grasp was the first one motion-planned (ranks_tried 1);
 otherwise the inverse kinematics draws other restarts and a borderline attempt may differ
-(marked `~`). Runs made before attempts.csv recorded grasp poses cannot be replayed this way:
-`python bench/replay_attempts.py RUN` plans them again instead.
+(marked `~`); a --replan replay is exact. Runs made before attempts.csv recorded grasp poses
+can only be replayed with --replan.
 
 Exit status: 0 when every replayed attempt ended as recorded, 1 when one did not, 2 on bad
 input.
@@ -49,18 +53,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="replay up to this attempt index of each trial (default: all its attempts)",
     )
     parser.add_argument(
-        "--outcome", default=None, metavar="NAME", help="without --trial: trials with this outcome"
+        "--replan",
+        action="store_true",
+        help="plan again with the run's planner at the recorded seed (default: execute the "
+        "recorded grasps)",
     )
-    parser.add_argument(
-        "--planner", default=None, metavar="NAME", help="without --trial: trials of this planner"
-    )
-    parser.add_argument(
-        "--limit",
-        type=int,
-        default=10,
-        metavar="N",
-        help="without --trial: at most this many trials (default 10)",
-    )
+    _add_filters(parser)
     parser.add_argument(
         "--set",
         action="append",
@@ -69,7 +67,45 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="replay with this trial-config value changed, e.g. execution.release_height_m=0.01",
     )
     parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="OUT.csv",
+        help="write every replayed attempt (key, index, recorded, replayed, exact, detail)",
+    )
+    parser.add_argument(
         "--rerun", type=Path, default=None, metavar="OUT.rrd", help="record the replay (one trial)"
+    )
+
+
+def _add_filters(parser: argparse.ArgumentParser) -> None:
+    """The options that choose trials when no --trial is given."""
+    parser.add_argument(
+        "--outcome",
+        default="",
+        metavar="NAME",
+        help="without --trial: trials with an attempt of this outcome, e.g. dropped",
+    )
+    parser.add_argument(
+        "--planner", default="", metavar="NAME", help="without --trial: trials of this planner"
+    )
+    parser.add_argument(
+        "--detail",
+        default="",
+        metavar="TEXT",
+        help="without --trial: trials with an attempt whose detail contains TEXT",
+    )
+    parser.add_argument(
+        "--failed-graspable",
+        action="store_true",
+        help="without --trial: trials with a failed attempt on a graspable presentation",
+    )
+    parser.add_argument(
+        "--limit",
+        type=int,
+        default=10,
+        metavar="N",
+        help="without --trial: at most this many trials (default 10)",
     )
 
 
@@ -91,23 +127,30 @@ def _overrides(items: list[str]) -> dict[str, object]:
 
 def _chosen_keys(args: argparse.Namespace, rows: list[dict[str, str]]) -> list[str]:
     from hsqbench.cli import CommandError
+    from hsqbench.experiment.replay import TrialFilter, select_trials
 
     if args.trial:
         return list(args.trial)
-    keys = []
-    for r in rows:
-        if r["status"] != "ok" or r["trial_key"] in keys:
-            continue
-        if args.outcome and r["outcome"] != args.outcome:
-            continue
-        if args.planner and r["planner"] != args.planner:
-            continue
-        keys.append(r["trial_key"])
+    chosen = TrialFilter(args.outcome, args.planner, args.detail, args.failed_graspable)
+    keys = select_trials(rows, chosen)
     if not keys:
-        raise CommandError(f"{args.run}: no finished trial matches --outcome / --planner")
+        raise CommandError(
+            f"{args.run}: no finished trial matches --outcome / --planner / --detail / "
+            "--failed-graspable"
+        )
     if len(keys) > args.limit:
         print(f"{len(keys)} trials match; replaying the first {args.limit} (--limit)")
     return keys[: args.limit]
+
+
+def _write_csv(path: Path, replayed: list) -> None:
+    import csv
+
+    with path.open("w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(["trial_key", "attempt_index", "recorded", "replayed", "exact", "detail"])
+        for a in replayed:
+            out.writerow([a.key, a.index, a.recorded, a.replayed, int(a.exact), a.detail])
 
 
 def run(args: argparse.Namespace) -> int:
@@ -117,6 +160,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.limit < 1:
         raise CommandError(f"--limit must be >= 1, got {args.limit}")
+    if args.out is not None and not args.out.parent.is_dir():
+        raise CommandError(f"--out {args.out}: folder {args.out.parent} does not exist")
     rows = run_rows(args.run)
     config = run_trial_config(args.run, _overrides(args.set))
     keys = _chosen_keys(args, rows)
@@ -131,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
 
             recorder = RerunRecorder(args.rerun)
         try:
-            attempts = replay_trial(trial, config, args.attempt, recorder)
+            attempts = replay_trial(trial, config, args.attempt, recorder, args.replan)
         finally:
             if recorder is not None:
                 recorder.close()
@@ -141,10 +186,13 @@ def run(args: argparse.Namespace) -> int:
                 f"{a.key} #{a.index}: {a.recorded} -> {a.replayed}{mark} ({a.detail})", flush=True
             )
         replayed += attempts
+    if args.out is not None:
+        _write_csv(args.out, replayed)
     same = sum(a.same for a in replayed)
     for (old, new), n in sorted(Counter((a.recorded, a.replayed) for a in replayed).items()):
         print(f"  {old} -> {new}: {n}")
     print(f"{same} of {len(replayed)} replayed attempts ended as recorded")
-    if args.rerun is not None:
-        print(f"wrote {args.rerun}")
+    for path in (args.out, args.rerun):
+        if path is not None:
+            print(f"wrote {path}")
     return 0 if same == len(replayed) else 1

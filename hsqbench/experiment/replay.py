@@ -10,6 +10,9 @@ that found no grasp finds none again). The replay is exact when the executed gra
 first one motion-planned (``ranks_tried`` 1): otherwise the run's inverse kinematics had drawn
 restarts for the grasps tried before it, so the replay's arm may take a slightly different
 branch, and a borderline attempt may end differently (:attr:`ReplayedAttempt.exact` says which).
+
+With ``replan`` the trial's own planner plans again at the recorded seed instead (a change of
+the planner or the perception shows; a run made before the grasp columns can be replayed so).
 """
 
 from __future__ import annotations
@@ -50,7 +53,7 @@ def recorded_grasp(row: dict[str, str]) -> Grasp | None:
         raise ReplayError(
             f"attempt {row['trial_key']}#{row['attempt_index']} has no grasp_pose: the run was "
             "made before attempts.csv recorded grasp poses; re-plan it instead with "
-            "`python bench/replay_attempts.py RUN`"
+            "`hsqbench replay RUN --replan`"
         )
     position, rotation = from_pose7(numbers(field))
     pose = Pose(position, rotation)
@@ -132,16 +135,22 @@ def replay_trial(
     trial_config: Any,
     upto: int | None = None,
     recorder: Any = None,
+    replan: bool = False,
 ) -> list[ReplayedAttempt]:
     """Re-execute the recorded grasps of one trial's rows (:func:`trial_rows`), attempts
-    ``0..upto`` (default: all), and pair each replayed attempt with its row."""
+    ``0..upto`` (default: all), and pair each replayed attempt with its row. With ``replan``
+    the trial's planner plans again instead (same seed and scene, so exact)."""
     from hsqbench.sim.trial import run_isolated_trial, run_packed_round
 
     first = rows[0]
     last = len(rows) - 1 if upto is None else upto
     if not 0 <= last < len(rows):
         raise ReplayError(f"trial {first['trial_key']} has attempts 0..{len(rows) - 1}, not {upto}")
-    planner = RecordedGrasps([recorded_grasp(r) for r in rows[: last + 1]])
+    planner = (
+        first["planner"]
+        if replan
+        else RecordedGrasps([recorded_grasp(r) for r in rows[: last + 1]])
+    )
     seed, objects = int(first["seed"]), [o for o in first["objects"].split(";") if o]
     if first["experiment"] == "isolated":
         result = run_isolated_trial(objects[0], seed, planner, trial_config, recorder=recorder)
@@ -159,7 +168,7 @@ def replay_trial(
                 recorded=row["outcome"],
                 replayed=str(attempt.outcome),
                 detail=attempt.detail,
-                exact=row.get("ranks_tried", "") in ("", "0", "1"),
+                exact=replan or row.get("ranks_tried", "") in ("", "0", "1"),
                 attempt=attempt,
             )
         )
@@ -175,6 +184,39 @@ def replay_trial(
             )
         )
     return out
+
+
+@dataclass(frozen=True)
+class TrialFilter:
+    """Which finished trials of a run to replay: every field left empty keeps all.
+
+    Attributes:
+        outcome: a trial with an attempt of this recorded outcome.
+        planner: a trial of this planner.
+        detail: a trial with an attempt whose detail contains this text.
+        failed_graspable: a trial with a failed attempt on a graspable presentation.
+    """
+
+    outcome: str = ""
+    planner: str = ""
+    detail: str = ""
+    failed_graspable: bool = False
+
+    def keeps(self, row: dict[str, str]) -> bool:
+        """Whether attempt ``row`` qualifies its trial."""
+        return (
+            row["status"] == "ok"
+            and (not self.outcome or row["outcome"] == self.outcome)
+            and (not self.planner or row["planner"] == self.planner)
+            and self.detail in row.get("detail", "")
+            and (not self.failed_graspable or (row["graspable"], row["success"]) == ("1", "0"))
+        )
+
+
+def select_trials(rows: Sequence[dict[str, str]], chosen: TrialFilter) -> list[str]:
+    """The keys of the trials (isolated attempts, packed or pile rounds) with an attempt that
+    ``chosen`` keeps, in the run's row order."""
+    return list(dict.fromkeys(r["trial_key"] for r in rows if chosen.keeps(r)))
 
 
 def run_rows(run_dir: str | Path) -> list[dict[str, str]]:
