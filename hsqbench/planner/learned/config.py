@@ -5,14 +5,13 @@ Every default is mirrored, with its reason, in ``configs/contact_graspnet.yaml``
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
-from hsqbench.config import load_config, resolve_config_path
+from hsqbench.config import load_cached, load_config
 
 
 @dataclass(frozen=True)
@@ -115,10 +114,6 @@ def resolve_contact_graspnet_config(
             "the contact-graspnet planner takes a ContactGraspNetConfig, a config name or a "
             f"YAML path, got {type(config).__name__}"
         )
-    path = resolve_config_path("contact_graspnet" if config is None else config)
-    return _load(str(path), path.stat().st_mtime_ns)
-
-
-@functools.lru_cache(maxsize=8)
-def _load(path: str, mtime_ns: int) -> ContactGraspNetConfig:
-    return load_contact_graspnet_config(path)
+    return load_cached(
+        load_contact_graspnet_config, "contact_graspnet" if config is None else config
+    )

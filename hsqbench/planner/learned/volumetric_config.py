@@ -5,14 +5,13 @@ Every default is mirrored, with its reason, in ``configs/volumetric.yaml``.
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
-from hsqbench.config import load_config, resolve_config_path
+from hsqbench.config import load_cached, load_config
 
 SCENE_KINDS = ("isolated", "packed", "pile")
 
@@ -161,10 +160,9 @@ def resolve_volumetric_config(config: VolumetricConfig | str | Path | None) -> V
             "the vgn and giga planners take a VolumetricConfig, a config name or a YAML path, "
             f"got {type(config).__name__}"
         )
-    path = resolve_config_path("volumetric" if config is None else config)
-    return _load(str(path), path.stat().st_mtime_ns)
+    return load_cached(load_volumetric_config, "volumetric" if config is None else config)
 
 
-@functools.lru_cache(maxsize=8)
-def _load(path: str, mtime_ns: int) -> VolumetricConfig:
+def load_volumetric_config(path: str | Path) -> VolumetricConfig:
+    """Load ``configs/volumetric.yaml`` or another file (uncached; see the resolver)."""
     return load_config(VolumetricConfig, path)

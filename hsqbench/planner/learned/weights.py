@@ -8,8 +8,8 @@ machinery (``.part`` file, resume, size and sha256 checks, atomic rename). Every
 against the sha256 below before torch reads it, and its state dict must match our module key for
 key and shape for shape (:func:`load_strict`).
 
-Provenance: ``data/models/`` of github.com/supersglzc/GIGA at commit 30efe59 (2023-08-23), a fork
-of UT-Austin-RPL/GIGA whose README ships the same files in its data archive. GIGA's code is MIT,
+Provenance: ``data/models/`` of github.com/supersglzc/GIGA at commit 30efe59 (2023-08-23), forked
+from UT-Austin-RPL/GIGA, whose README ships the same files in its data archive. GIGA's code is MIT,
 VGN's BSD-3; the weights carry no licence of their own: credit both papers.
 """
 
