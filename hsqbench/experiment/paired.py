@@ -125,6 +125,16 @@ class PairedDifference:
             return SAME
         return BETTER if self.only_planner > self.only_reference else WORSE
 
+    def summary_columns(self) -> dict[str, float | str]:
+        """The difference, its interval (percentage points), p and verdict, as CSV columns."""
+        return {
+            "difference_pp": 100 * self.difference,
+            "ci_low_pp": 100 * self.low,
+            "ci_high_pp": 100 * self.high,
+            "p_value": self.p_value,
+            "verdict": self.verdict,
+        }
+
     def percent(self) -> str:
         """``"-6.7 [-11.8, -1.9]"``: the difference and its interval in percentage points."""
         return f"{100 * self.difference:+.1f} [{100 * self.low:+.1f}, {100 * self.high:+.1f}]"

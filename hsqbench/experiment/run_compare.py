@@ -101,11 +101,7 @@ def _difference(comparison: str, planner: str, a, b, confidence: float) -> dict[
         "b_percent": 100 * (d.both + d.only_planner) / d.n,
         "success_to_failure": d.only_reference,
         "failure_to_success": d.only_planner,
-        "difference_pp": 100 * d.difference,
-        "ci_low_pp": 100 * d.low,
-        "ci_high_pp": 100 * d.high,
-        "p_value": d.p_value,
-        "verdict": d.verdict,
+        **d.summary_columns(),
     }
 
 
