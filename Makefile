@@ -106,11 +106,13 @@ sweeps: $(STAMP)
 # The canonical runs behind README.md and docs/ (the list: configs/canonical.yaml), into
 # results/, with every planner (the learned extra too) at this code version: about 10 hours with
 # JOBS=2 on a 2-core machine. Resumable: rerunning continues where it stopped. ONLY="paper3 ycb3"
-# makes some of them; RESULTS_ARGS="--dry-run" lists them with their expected time.
+# makes some of them; RESULTS_ARGS="--dry-run" lists them with their expected time. Then the
+# README's headline tables are rewritten from them (hsqbench.experiment.front_page).
 ONLY ?=
 RESULTS_ARGS ?=
 results: $(LEARNED_STAMP)
 	$(PY) -m hsqbench.experiment.canonical --jobs $(JOBS) $(if $(ONLY),--only $(ONLY)) $(RESULTS_ARGS)
+	$(PY) -m hsqbench.experiment.front_page
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache

@@ -1,0 +1,255 @@
+"""The README's headline tables, written from the canonical runs under ``results/``.
+
+Each table is a block of README.md between ``<!-- table: NAME -->`` and ``<!-- /table -->``;
+its rows come from the report files of one run (``table1_isolated.csv``, ``table2_packed.csv``,
+``table4_pile.csv``, ``paired.csv``) and its "measured at" line from that run's ``run.json``, so
+every number on the front page names the run and the code version that made it.
+
+    python -m hsqbench.experiment.front_page            # rewrite the blocks of README.md
+    python -m hsqbench.experiment.front_page --check    # exit 1 if README.md is out of date
+
+``make results`` ends with the first; a test runs the second on the committed results.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hsqbench.experiment.graspable import method_label
+from hsqbench.experiment.paired_table import DEFAULT_REFERENCE, PAIRED_CSV
+from hsqbench.experiment.pile_table import TABLE4_CSV
+from hsqbench.experiment.report import TABLE1_CSV, TABLE2_CSV
+from hsqbench.settings import REPO_ROOT
+
+BLOCK = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
+
+
+_PAIRED_KEYS = ["comparison", "planner"]
+
+
+class FrontPageError(ValueError):
+    """A block or a run the front page needs is missing; the message says which and what to do."""
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run folder's report files (read once)."""
+
+    folder: Path
+    meta: dict
+    paired: pd.DataFrame
+
+    @classmethod
+    def load(cls, folder: Path) -> Run:
+        meta_path = folder / "run.json"
+        if not meta_path.is_file():
+            raise FrontPageError(
+                f"{folder}: no run.json; make the canonical runs first (`make results`)"
+            )
+        paired = folder / PAIRED_CSV
+        return cls(
+            folder,
+            json.loads(meta_path.read_text()),
+            pd.read_csv(paired) if paired.is_file() else pd.DataFrame(columns=_PAIRED_KEYS),
+        )
+
+    def table(self, name: str) -> pd.DataFrame:
+        path = self.folder / name
+        if not path.is_file():
+            raise FrontPageError(f"{path} is missing; write the run's report (`hsqbench report`)")
+        return pd.read_csv(path)
+
+    def vs_reference(self, comparison: str, label: str) -> str:
+        """The paired difference of planner ``label`` to the reference, as a cell."""
+        if label == method_label(DEFAULT_REFERENCE):
+            return "reference"
+        p = self.paired
+        rows = p[(p["comparison"] == comparison) & (p["planner"].map(method_label) == label)]
+        if rows.empty:
+            return ""
+        r = rows.iloc[0]
+        return f"{_signed(r.difference_pp)} [{_signed(r.ci_low_pp)}, {_signed(r.ci_high_pp)}], p {_p(r.p_value)}"
+
+    def measured_line(self) -> str:
+        m = self.meta
+        seeds = ", ".join(str(s) for s in m["config"]["seeds"])
+        machine = m.get("machine", {})
+        where = f", {machine['cpus']} cores of {machine['cpu_model']}" if machine else ""
+        rel = self.folder.name
+        return (
+            f"*Measured at:* code `{m['code_version']}`: `results/{rel}/` (config "
+            f"`{m['config_name']}` {m['config_hash']}, base seeds {seeds}{where})."
+        )
+
+
+def _signed(v: float) -> str:
+    return f"{v:+.1f}".replace("-", "\u2212")  # a typographic minus, as the README's prose
+
+
+def _p(p: float) -> str:
+    return f"{p:.0e}" if p < 1e-3 else f"{p:.3f}"
+
+
+def _pct(v: float) -> str:
+    return "" if not np.isfinite(v) else f"{v:.1f}"
+
+
+def _ci(low: float, high: float) -> str:
+    return "" if not np.isfinite(low) else f"[{low:.1f}, {high:.1f}]"
+
+
+def _kn(k: float, n: float) -> str:
+    return "" if not np.isfinite(n) or n == 0 else f"{int(k)}/{int(n)}"
+
+
+def _markdown(headers: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(headers) + " |", "|" + " --- |" * len(headers)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _source(row: pd.Series) -> str:
+    return "measured" if str(row.source).startswith("measured") else str(row.source)
+
+
+def isolated_table(run: Run, reported: bool = True) -> str:
+    """Table I: isolated GSR over all and over graspable presentations, paired to hsq; the
+    paper's reported rows first unless ``reported`` is false."""
+    t = _rows(run.table(TABLE1_CSV), reported)
+    rows = [
+        [
+            r.method,
+            _pct(r.gsr_percent),
+            _ci(r.ci_low_percent, r.ci_high_percent),
+            _kn(r.successes, r.attempts),
+            _pct(r.graspable_gsr_percent),
+            _ci(r.graspable_ci_low_percent, r.graspable_ci_high_percent),
+            _source(r),
+            run.vs_reference("isolated GSR", r.method) if _measured(r) else "",
+        ]
+        for r in t.itertuples()
+    ]
+    headers = ["planner", "GSR", "95 % CI", "k/n", "graspable", "95 % CI", "source",
+               "vs hsq, paired (pp)"]  # fmt: skip
+    return _markdown(headers, rows)
+
+
+def packed_table(run: Run, reported: bool = True) -> str:
+    """Table II: packed GSR and CR (all and graspable), CR paired to hsq."""
+    t = _rows(run.table(TABLE2_CSV), reported)
+    rows = [
+        [
+            r.method,
+            _pct(r.gsr_percent),
+            _ci(r.gsr_ci_low_percent, r.gsr_ci_high_percent),
+            _pct(r.cr_percent),
+            _ci(r.cr_ci_low_percent, r.cr_ci_high_percent),
+            _graspable_pair(r.graspable_gsr_percent, r.graspable_cr_percent),
+            _source(r),
+            run.vs_reference("packed CR", r.method) if _measured(r) else "",
+        ]
+        for r in t.itertuples()
+    ]
+    headers = ["planner", "GSR", "95 % CI", "CR", "95 % CI", "GSR / CR, graspable", "source",
+               "CR vs hsq, paired (pp)"]  # fmt: skip
+    return _markdown(headers, rows)
+
+
+def pile_table(run: Run) -> str:
+    """Table IV: pile GSR and CR, CR paired to hsq."""
+    t = run.table(TABLE4_CSV)
+    rows = [
+        [
+            r.method,
+            _pct(r.gsr_percent),
+            _ci(r.gsr_ci_low_percent, r.gsr_ci_high_percent),
+            _kn(r.successes, r.attempts),
+            _pct(r.cr_percent),
+            _ci(r.cr_ci_low_percent, r.cr_ci_high_percent),
+            _source(r),
+            run.vs_reference("pile CR", r.method) if _measured(r) else "",
+        ]
+        for r in t.itertuples()
+    ]
+    headers = ["planner", "GSR", "95 % CI", "k/n", "CR", "95 % CI", "source",
+               "CR vs hsq, paired (pp)"]  # fmt: skip
+    return _markdown(headers, rows)
+
+
+def _rows(table: pd.DataFrame, reported: bool) -> pd.DataFrame:
+    return table if reported else table[table["source"].str.startswith("measured")]
+
+
+def _measured(row: object) -> bool:
+    return str(row.source).startswith("measured")
+
+
+def _graspable_pair(gsr: float, cr: float) -> str:
+    return "" if not np.isfinite(gsr) else f"{gsr:.1f} / {_pct(cr)}"
+
+
+#: README block name -> (run folder under results/, table writer).
+TABLES: dict[str, tuple[str, Callable[[Run], str]]] = {
+    "paper-isolated": ("paper3", isolated_table),
+    "paper-packed": ("paper3", packed_table),
+    # The papers report nothing on these objects: their rows would mislead here.
+    "unseen-isolated": ("ycb3", lambda run: isolated_table(run, reported=False)),
+    "unseen-packed": ("ycb3", lambda run: packed_table(run, reported=False)),
+    "paper-pile": ("paper3-pile", pile_table),
+}
+
+
+def render_block(name: str, results: Path) -> str:
+    """The markdown of README block ``name`` from the runs under ``results``."""
+    if name not in TABLES:
+        raise FrontPageError(f"README block {name!r} is not one of {sorted(TABLES)}")
+    folder, write = TABLES[name]
+    run = Run.load(results / folder)
+    return f"{write(run)}\n\n{run.measured_line()}\n"
+
+
+def update(text: str, results: Path) -> str:
+    """``text`` (README.md) with every table block rewritten from ``results``."""
+    found = {m["name"] for m in BLOCK.finditer(text)}
+    if not found:
+        raise FrontPageError("README.md has no <!-- table: NAME --> ... <!-- /table --> block")
+    return BLOCK.sub(lambda m: m[1] + render_block(m["name"], results) + m[4], text)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m hsqbench.experiment.front_page",
+        description="Rewrite README.md's headline tables from the canonical runs in results/.",
+    )
+    parser.add_argument("--readme", type=Path, default=REPO_ROOT / "README.md")
+    parser.add_argument("--results", type=Path, default=REPO_ROOT / "results")
+    parser.add_argument("--check", action="store_true", help="exit 1 if README.md is stale")
+    args = parser.parse_args(argv)
+    text = args.readme.read_text()
+    try:
+        new = update(text, args.results)
+    except FrontPageError as exc:
+        print(f"front page: {exc}", file=sys.stderr)
+        return 2
+    if args.check:
+        if new != text:
+            print(f"{args.readme}: tables differ from {args.results}; run "
+                  "`python -m hsqbench.experiment.front_page`", file=sys.stderr)  # fmt: skip
+            return 1
+        return 0
+    args.readme.write_text(new)
+    print(f"{args.readme}: tables written from {args.results}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
