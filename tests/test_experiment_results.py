@@ -268,7 +268,7 @@ def test_a_committed_run_from_before_the_grasp_columns_loads_with_them_empty() -
 
     from hsqbench.experiment.rows import pose_table
 
-    run = Path(__file__).resolve().parents[1] / "results" / "paper3-redraw"
+    run = Path(__file__).resolve().parents[1] / "results" / "ycb3-redraw"
     rows = load_results(run).attempts
     assert rows and all(r["grasp_pose"] == "" and r["top_scores"] == "" for r in rows)
     assert np.isnan(pose_table([r["grasp_pose"] for r in rows])).all()
