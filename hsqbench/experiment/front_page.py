@@ -20,6 +20,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -117,80 +118,72 @@ def _markdown(headers: list[str], rows: list[list[str]]) -> str:
     return "\n".join(lines)
 
 
-def _source(row: pd.Series) -> str:
-    return "measured" if str(row.source).startswith("measured") else str(row.source)
+#: A table's middle columns: (header, cell of a report CSV row).
+Columns = tuple[tuple[str, Callable[[Any], str]], ...]
+
+GSR_CELLS: Columns = (
+    ("GSR", lambda r: _pct(r.gsr_percent)),
+    ("95 % CI", lambda r: _ci(r.gsr_ci_low_percent, r.gsr_ci_high_percent)),
+)
+CR_CELLS: Columns = (
+    ("CR", lambda r: _pct(r.cr_percent)),
+    ("95 % CI", lambda r: _ci(r.cr_ci_low_percent, r.cr_ci_high_percent)),
+)
+KN_CELL: Columns = (("k/n", lambda r: _kn(r.successes, r.attempts)),)
+ISOLATED: Columns = (
+    ("GSR", lambda r: _pct(r.gsr_percent)),
+    ("95 % CI", lambda r: _ci(r.ci_low_percent, r.ci_high_percent)),
+    *KN_CELL,
+    ("graspable", lambda r: _pct(r.graspable_gsr_percent)),
+    ("95 % CI", lambda r: _ci(r.graspable_ci_low_percent, r.graspable_ci_high_percent)),
+)
+PACKED: Columns = (
+    *GSR_CELLS,
+    *CR_CELLS,
+    (
+        "GSR / CR, graspable",
+        lambda r: _graspable_pair(r.graspable_gsr_percent, r.graspable_cr_percent),
+    ),
+)
+PILE: Columns = (*GSR_CELLS, *KN_CELL, *CR_CELLS)
+
+
+def _render(run: Run, csv: str, columns: Columns, comparison: str, reported: bool) -> str:
+    """One row per planner of ``run``'s report ``csv``: method, ``columns``, source, and the
+    paired difference to hsq in ``comparison`` (the papers' reported rows unless not
+    ``reported``)."""
+    table = run.table(csv)
+    if not reported:
+        table = table[table["source"].str.startswith("measured")]
+    rows = []
+    for r in table.itertuples():
+        measured = str(r.source).startswith("measured")
+        rows.append(
+            [
+                r.method,
+                *(cell(r) for _, cell in columns),
+                "measured" if measured else str(r.source),
+                run.vs_reference(comparison, r.method) if measured else "",
+            ]
+        )
+    what = comparison.split()[-1]
+    paired = "vs hsq, paired (pp)" if what == "GSR" else f"{what} vs hsq, paired (pp)"
+    return _markdown(["planner", *(h for h, _ in columns), "source", paired], rows)
 
 
 def isolated_table(run: Run, reported: bool = True) -> str:
-    """Table I: isolated GSR over all and over graspable presentations, paired to hsq; the
-    paper's reported rows first unless ``reported`` is false."""
-    t = _rows(run.table(TABLE1_CSV), reported)
-    rows = [
-        [
-            r.method,
-            _pct(r.gsr_percent),
-            _ci(r.ci_low_percent, r.ci_high_percent),
-            _kn(r.successes, r.attempts),
-            _pct(r.graspable_gsr_percent),
-            _ci(r.graspable_ci_low_percent, r.graspable_ci_high_percent),
-            _source(r),
-            run.vs_reference("isolated GSR", r.method) if _measured(r) else "",
-        ]
-        for r in t.itertuples()
-    ]
-    headers = ["planner", "GSR", "95 % CI", "k/n", "graspable", "95 % CI", "source",
-               "vs hsq, paired (pp)"]  # fmt: skip
-    return _markdown(headers, rows)
+    """Table I: isolated GSR over all and over graspable presentations, paired to hsq."""
+    return _render(run, TABLE1_CSV, ISOLATED, "isolated GSR", reported)
 
 
 def packed_table(run: Run, reported: bool = True) -> str:
     """Table II: packed GSR and CR (all and graspable), CR paired to hsq."""
-    t = _rows(run.table(TABLE2_CSV), reported)
-    rows = [
-        [
-            r.method,
-            _pct(r.gsr_percent),
-            _ci(r.gsr_ci_low_percent, r.gsr_ci_high_percent),
-            _pct(r.cr_percent),
-            _ci(r.cr_ci_low_percent, r.cr_ci_high_percent),
-            _graspable_pair(r.graspable_gsr_percent, r.graspable_cr_percent),
-            _source(r),
-            run.vs_reference("packed CR", r.method) if _measured(r) else "",
-        ]
-        for r in t.itertuples()
-    ]
-    headers = ["planner", "GSR", "95 % CI", "CR", "95 % CI", "GSR / CR, graspable", "source",
-               "CR vs hsq, paired (pp)"]  # fmt: skip
-    return _markdown(headers, rows)
+    return _render(run, TABLE2_CSV, PACKED, "packed CR", reported)
 
 
 def pile_table(run: Run) -> str:
-    """Table IV: pile GSR and CR, CR paired to hsq."""
-    t = run.table(TABLE4_CSV)
-    rows = [
-        [
-            r.method,
-            _pct(r.gsr_percent),
-            _ci(r.gsr_ci_low_percent, r.gsr_ci_high_percent),
-            _kn(r.successes, r.attempts),
-            _pct(r.cr_percent),
-            _ci(r.cr_ci_low_percent, r.cr_ci_high_percent),
-            _source(r),
-            run.vs_reference("pile CR", r.method) if _measured(r) else "",
-        ]
-        for r in t.itertuples()
-    ]
-    headers = ["planner", "GSR", "95 % CI", "k/n", "CR", "95 % CI", "source",
-               "CR vs hsq, paired (pp)"]  # fmt: skip
-    return _markdown(headers, rows)
-
-
-def _rows(table: pd.DataFrame, reported: bool) -> pd.DataFrame:
-    return table if reported else table[table["source"].str.startswith("measured")]
-
-
-def _measured(row: object) -> bool:
-    return str(row.source).startswith("measured")
+    """Table IV: pile GSR and CR, CR paired to hsq (GIGA's reported row last, as context)."""
+    return _render(run, TABLE4_CSV, PILE, "pile CR", reported=True)
 
 
 def _graspable_pair(gsr: float, cr: float) -> str:
