@@ -155,3 +155,18 @@ def test_a_benchmark_run_reports_their_planning_time(planner, tmp_path):
     assert len(row) == 1 and row["n"].iloc[0] == len(attempts) >= 1
     assert row["median_s"].iloc[0] == pytest.approx(attempts["planning_s"].median())
     assert 0 < row["median_s"].iloc[0] < 60
+
+
+def test_the_other_weights_pairing_example_swaps_the_weights():
+    """examples/other_weights: a plugin planner whose config extends the shipped one."""
+    from hsqbench.planner.plugins import factory, load_spec
+    from hsqbench.settings import REPO_ROOT
+
+    obj, source = load_spec(f"{REPO_ROOT}/examples/other_weights/swapped.py:GIGASwapped")
+    try:
+        planner = factory(obj, "giga-swapped")()
+    except weights.WeightsError as exc:
+        pytest.skip(f"the published weights are not here ({exc}); set HSQ_MODELS_DIR")
+    assert planner.name == "giga-swapped" and source.kind == "file"
+    assert planner.config.weights == {"isolated": "pile", "packed": "pile", "pile": "packed"}
+    assert planner.config.grid == resolve_volumetric_config(None).grid
