@@ -3,11 +3,21 @@ quick protocol with the fake backend, so in seconds)."""
 
 from __future__ import annotations
 
+import gzip
+
 import pytest
 
 from hsqbench.config import ConfigError, from_dict
-from hsqbench.experiment.canonical import Canonical, load_canonical, main, make_results
+from hsqbench.experiment.canonical import (
+    Canonical,
+    load_canonical,
+    main,
+    make_results,
+    pack_attempts,
+    unpack_attempts,
+)
 from hsqbench.experiment.config import load_experiment_config
+from hsqbench.experiment.report import load_run
 from hsqbench.experiment.results import ResultStore
 from hsqbench.settings import SWEEP_DIR
 from tests.fake_backend import FakeBackend
@@ -49,12 +59,14 @@ def test_make_results_on_the_quick_protocol_makes_then_resumes_each_run(tmp_path
     expected = {r.name for r in canon.runs if set(r.experiments) & set(quick.enabled_experiments())}
     assert made == expected
     for name in made:
-        assert ResultStore(tmp_path / name).attempts_path.is_file()
+        # A finished run is stored packed; its rows read back as the run made them.
+        assert not ResultStore(tmp_path / name).attempts_path.exists()
+        assert len(load_run(tmp_path / name).attempts) > 0
         assert "measured, fake backend" in (tmp_path / name / "tables.md").read_text()
     out = capsys.readouterr().out
     assert "quick has none of pile" in out
 
-    rows = {n: (tmp_path / n / "attempts.csv").read_text() for n in made}
+    rows = {n: (tmp_path / n / "attempts.csv.gz").read_bytes() for n in made}
     assert (
         make_results(
             canon,
@@ -66,7 +78,23 @@ def test_make_results_on_the_quick_protocol_makes_then_resumes_each_run(tmp_path
         )
         == 0
     )
-    assert {n: (tmp_path / n / "attempts.csv").read_text() for n in made} == rows  # nothing rerun
+    # Unpacked, resumed with nothing to rerun, packed again to the same bytes.
+    assert {n: (tmp_path / n / "attempts.csv.gz").read_bytes() for n in made} == rows
+
+
+def test_packing_is_reproducible_and_unpacking_restores_the_file(tmp_path):
+    run = tmp_path / "r"
+    run.mkdir()
+    text = b"trial_key,outcome\na,success\nb,empty\n"
+    (run / "attempts.csv").write_bytes(text)
+    first = pack_attempts(run).read_bytes()
+    assert not (run / "attempts.csv").exists() and gzip.decompress(first) == text
+    unpack_attempts(run)
+    assert (run / "attempts.csv").read_bytes() == text and not (run / "attempts.csv.gz").exists()
+    assert pack_attempts(run).read_bytes() == first  # no time or name in the header
+    (run / "attempts.csv").write_bytes(text)
+    with pytest.raises(FileExistsError, match=r"both attempts\.csv and attempts\.csv\.gz"):
+        unpack_attempts(run)
 
 
 def test_dry_run_states_the_expected_time_and_unknown_names_fail(capsys):

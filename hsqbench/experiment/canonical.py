@@ -8,6 +8,10 @@ config is refused by the runner (move it aside, or ``--force`` through ``hsqbenc
 Unlike ``hsqbench benchmark``, a canonical run does not leave out a planner whose optional extra
 is missing: the tables would lack a row, so it stops first and says which extra to install.
 
+A finished run's ``attempts.csv`` is stored gzipped (``attempts.csv.gz``, byte-reproducible: no
+name or time in its header): the committed runs stay a few MB, and every reader takes either
+form. The next ``make results`` unpacks it, resumes (nothing to do when complete) and packs again.
+
     python -m hsqbench.experiment.canonical [--out results] [--only paper3 ...] [--jobs N]
     python -m hsqbench.experiment.canonical --protocol quick --out /tmp/x   # the logic, fast
 """
@@ -15,6 +19,7 @@ is missing: the tables would lack a row, so it stops first and says which extra 
 from __future__ import annotations
 
 import argparse
+import gzip
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -87,6 +92,39 @@ def missing_planners(canon: Canonical, protocol: str | None = None) -> dict[str,
     return missing
 
 
+def pack_attempts(run_dir: Path) -> Path:
+    """Replace ``run_dir/attempts.csv`` by ``attempts.csv.gz`` (level 9, mtime 0, no file name:
+    the same rows give the same bytes); returns the packed file."""
+    from hsqbench.experiment.results import ATTEMPTS_FILE
+
+    plain = run_dir / ATTEMPTS_FILE
+    packed = run_dir / f"{ATTEMPTS_FILE}.gz"
+    tmp = packed.with_name(packed.name + ".tmp")
+    tmp.write_bytes(gzip.compress(plain.read_bytes(), compresslevel=9, mtime=0))
+    tmp.replace(packed)  # the packed file is whole before the plain one goes
+    plain.unlink()
+    return packed
+
+
+def unpack_attempts(run_dir: Path) -> None:
+    """Undo :func:`pack_attempts` so that the run can be resumed (a no-op on a plain run)."""
+    from hsqbench.experiment.results import ATTEMPTS_FILE
+
+    plain = run_dir / ATTEMPTS_FILE
+    packed = run_dir / f"{ATTEMPTS_FILE}.gz"
+    if not packed.exists():
+        return
+    if plain.exists():
+        raise FileExistsError(
+            f"{run_dir} holds both {ATTEMPTS_FILE} and {packed.name}: keep the one with the "
+            "run's rows (the larger) and delete the other"
+        )
+    tmp = plain.with_name(plain.name + ".tmp")
+    tmp.write_bytes(gzip.decompress(packed.read_bytes()))
+    tmp.replace(plain)
+    packed.unlink()
+
+
 def make_results(
     canon: Canonical,
     out: Path,
@@ -118,6 +156,7 @@ def make_results(
             print(f"== {run.name}: {config_name} has none of {', '.join(run.experiments)}")
             continue
         print(f"== {out / run.name}: {config_name}, about {run.expected_min:.0f} min", flush=True)
+        unpack_attempts(out / run.name)
         summary = run_benchmark(
             config,
             out / run.name,
@@ -130,6 +169,8 @@ def make_results(
             config_name=config_name,
         )
         write_report(out / run.name)
+        if summary.errors == 0:
+            pack_attempts(out / run.name)
         errors += summary.errors
     if canon.sweeps is not None and (only is None or canon.sweeps.name in only):
         from hsqbench.cli import main as cli_main

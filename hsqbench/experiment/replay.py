@@ -222,8 +222,9 @@ def select_trials(rows: Sequence[dict[str, str]], chosen: TrialFilter) -> list[s
 def run_rows(run_dir: str | Path) -> list[dict[str, str]]:
     """The finished attempt rows of a run folder (read only)."""
     from hsqbench.experiment.results import ATTEMPTS_FILE, load_results
+    from hsqbench.experiment.rows import has_attempts
 
     run = Path(run_dir)
-    if not (run / ATTEMPTS_FILE).exists() and not (run / f"{ATTEMPTS_FILE}.gz").exists():
+    if not has_attempts(run):
         raise FileNotFoundError(f"{run} has no {ATTEMPTS_FILE}: not a benchmark run folder")
     return load_results(run).attempts

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,13 @@ ATTEMPTS_FILE = "attempts.csv"
 ROUNDS_FILE = "rounds.csv"
 RUN_FILE = "run.json"
 LOCK_FILE = ".lock"
+
+
+def has_attempts(run_dir: Path) -> bool:
+    """Whether ``run_dir`` holds a run's attempts, plain or packed (``attempts.csv.gz``: a
+    canonical run, :func:`hsqbench.experiment.canonical.pack_attempts`)."""
+    return (run_dir / ATTEMPTS_FILE).exists() or (run_dir / f"{ATTEMPTS_FILE}.gz").exists()
+
 
 FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")
 

@@ -18,6 +18,7 @@ from hsqbench.experiment.results import (
     STATUS_OK,
     load_results,
 )
+from hsqbench.experiment.rows import has_attempts
 from hsqbench.experiment.settling import unsettled_note
 
 MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoCo backend
@@ -54,7 +55,7 @@ def load_run(run_dir: str | Path) -> RunData:
         FileNotFoundError: ``run_dir`` has no ``attempts.csv``.
     """
     run_dir = Path(run_dir)
-    if not any((run_dir / name).exists() for name in ("attempts.csv", "attempts.csv.gz")):
+    if not has_attempts(run_dir):
         raise FileNotFoundError(
             f"{run_dir}: no attempts.csv; give the folder of a run (runs/<run>)"
         )

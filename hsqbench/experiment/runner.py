@@ -301,7 +301,8 @@ def _existing_run(
     meta = store.read_meta()
     if resume and (run_dir / f"{ATTEMPTS_FILE}.gz").exists():
         raise ResultsError(
-            f"{run_dir}: its {ATTEMPTS_FILE} is gzipped (a committed run); gunzip it to resume"
+            f"{run_dir}: its {ATTEMPTS_FILE} is gzipped (a canonical run): `make results` "
+            "unpacks and resumes it, or gunzip it to resume it here"
         )
     has_data = meta is not None or (run_dir / ATTEMPTS_FILE).exists()
     if has_data and force:

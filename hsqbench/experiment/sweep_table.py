@@ -16,6 +16,7 @@ from typing import Any
 import pandas as pd
 
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
+from hsqbench.experiment.rows import has_attempts
 from hsqbench.experiment.stats import Rate
 
 COLUMNS = (
@@ -103,7 +104,7 @@ def sweep_table(root: Path, meta: dict[str, Any]) -> pd.DataFrame:
         for i, point in enumerate(param["points"]):
             for protocol, rel in point["runs"].items():
                 run_dir = root / rel
-                if not (run_dir / "attempts.csv").exists():
+                if not has_attempts(run_dir):
                     continue
                 for row in run_rows(run_dir, param["experiments"]):
                     rows.append(
