@@ -19,6 +19,7 @@ from hsqbench.experiment.canonical import (
 from hsqbench.experiment.config import load_experiment_config
 from hsqbench.experiment.report import load_run
 from hsqbench.experiment.results import ResultStore
+from hsqbench.planner.registry import resolve_planners
 from hsqbench.settings import SWEEP_DIR
 from tests.fake_backend import FakeBackend
 
@@ -65,6 +66,12 @@ def test_make_results_on_the_quick_protocol_makes_then_resumes_each_run(tmp_path
         assert "measured, fake backend" in (tmp_path / name / "tables.md").read_text()
     out = capsys.readouterr().out
     assert "quick has none of pile" in out
+    # A run that names its planners (plugin specs) runs those, not its protocol's.
+    named = [r for r in canon.runs if r.planners and r.name in made]
+    assert named
+    for run in named:
+        ran = set(load_run(tmp_path / run.name).attempts["planner"])
+        assert ran == set(resolve_planners(run.planners)) and not ran & set(quick.planners)
 
     rows = {n: (tmp_path / n / "attempts.csv.gz").read_bytes() for n in made}
     assert (

@@ -33,12 +33,14 @@ CANONICAL = "canonical"
 
 @dataclass(frozen=True)
 class CanonicalRun:
-    """One benchmark run: ``config``'s planners and ``experiments`` into ``<out>/<name>``."""
+    """One benchmark run: ``config``'s planners (or ``planners``: names or plugin specs, as
+    ``hsqbench benchmark --planners`` takes them) and ``experiments`` into ``<out>/<name>``."""
 
     name: str
     config: str
     experiments: tuple[str, ...]
     expected_min: float
+    planners: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.name or "/" in self.name:
@@ -143,6 +145,7 @@ def make_results(
     from hsqbench.experiment.executor import make_executor
     from hsqbench.experiment.report import write_report
     from hsqbench.experiment.runner import run_benchmark
+    from hsqbench.runs import protocol_planners
 
     executor = make_executor("local", jobs)
     errors = 0
@@ -150,7 +153,9 @@ def make_results(
         if only is not None and run.name not in only:
             continue
         config_name = protocol or run.config
-        config = load_experiment_config(config_name)
+        config, planners = protocol_planners(
+            load_experiment_config(config_name), list(run.planners) or None
+        )
         experiments = [e for e in run.experiments if e in config.enabled_experiments()]
         if not experiments:  # only with --protocol: the canonical list is checked by its test
             print(f"== {run.name}: {config_name} has none of {', '.join(run.experiments)}")
@@ -162,6 +167,7 @@ def make_results(
             out / run.name,
             backend=backend_factory(config) if backend_factory else None,
             executor=executor,
+            planners=planners,
             experiments=experiments,
             resume=True,
             retry_errors=True,
