@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -253,3 +254,35 @@ def test_a_bad_override_fails_before_anything_is_written(tmp_path, sweep):
     assert not (tmp_path / "sw").exists()
     with pytest.raises(ConfigError, match=r"no sweep 'nosuch'.*depth_noise"):
         load_sweep_config("nosuch")
+
+
+def test_learned_views_points_are_valid_and_the_near_cameras_look_at_the_workspace():
+    import mujoco
+
+    from hsqbench.settings import REPO_ROOT
+    from hsqbench.sim.trial import load_trial_config
+
+    sweep = load_sweep_config("learned_views")
+    (proto,) = sweep.protocols
+    config = point_config(proto, sweep)
+    model = mujoco.MjModel.from_xml_path(str(REPO_ROOT / "scenes" / "cameras.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    target = np.array([0.5, 0.0, 0.05])
+    used = set()
+    for point in sweep.parameters[0].points:
+        trial = load_trial_config(config.trial_config, point.overrides or None)
+        for name in trial.scene.depth_cameras.names:
+            cam = model.camera(name).id
+            forward = -data.cam_xmat[cam].reshape(3, 3)[:, 2]  # a MuJoCo camera looks along -z
+            to_target = target - data.cam_xpos[cam]
+            assert np.dot(forward, to_target) / np.linalg.norm(to_target) > 0.9999, name
+            used.add(name)
+    near = {"cam_near_left", "cam_near_right"}
+    assert near <= used
+    for name in near:  # 0.6 m away, 30 deg from vertical, as the networks' training views
+        offset = data.cam_xpos[model.camera(name).id] - target
+        assert np.linalg.norm(offset) == pytest.approx(0.6, abs=1e-3)
+        assert np.degrees(np.arccos(offset[2] / np.linalg.norm(offset))) == pytest.approx(
+            30, abs=0.1
+        )
