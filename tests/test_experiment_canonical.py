@@ -32,7 +32,7 @@ def test_every_canonical_run_names_a_protocol_with_its_experiments():
         assert set(run.experiments) <= set(config.enabled_experiments()), run.name
     for name in canon.sweeps.parameters:
         assert (SWEEP_DIR / f"{name}.yaml").is_file(), name
-    assert 60 * 6 < canon.expected_min() < 60 * 16  # the documented "about 8.5 h"
+    assert 60 * 6 < canon.expected_min() < 60 * 16  # the documented "about 7 hours"
 
 
 def test_repeated_folder_names_and_paths_are_refused():
