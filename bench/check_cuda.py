@@ -46,7 +46,9 @@ TABLE_MARGIN_M = 0.005
 
 
 def back_project(views) -> np.ndarray:
-    """World points of every measured pixel above the table (the planners' cloud)."""
+    """World points of every measured pixel above the table (the planners' cloud). The same
+    arithmetic as ``hsqbench.sim.camera.backproject``, written out here because that module
+    imports mujoco, which the lent GPU machines' image does not hold."""
     clouds = []
     for view in views:
         v, u = np.nonzero(view.depth_m > 0)
