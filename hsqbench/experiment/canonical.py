@@ -97,10 +97,9 @@ def missing_planners(canon: Canonical, protocol: str | None = None) -> dict[str,
 def pack_attempts(run_dir: Path) -> Path:
     """Replace ``run_dir/attempts.csv`` by ``attempts.csv.gz`` (level 9, mtime 0, no file name:
     the same rows give the same bytes); returns the packed file."""
-    from hsqbench.experiment.results import ATTEMPTS_FILE
+    from hsqbench.experiment.rows import attempts_paths
 
-    plain = run_dir / ATTEMPTS_FILE
-    packed = run_dir / f"{ATTEMPTS_FILE}.gz"
+    plain, packed = attempts_paths(run_dir)
     tmp = packed.with_name(packed.name + ".tmp")
     tmp.write_bytes(gzip.compress(plain.read_bytes(), compresslevel=9, mtime=0))
     tmp.replace(packed)  # the packed file is whole before the plain one goes
@@ -110,15 +109,14 @@ def pack_attempts(run_dir: Path) -> Path:
 
 def unpack_attempts(run_dir: Path) -> None:
     """Undo :func:`pack_attempts` so that the run can be resumed (a no-op on a plain run)."""
-    from hsqbench.experiment.results import ATTEMPTS_FILE
+    from hsqbench.experiment.rows import attempts_paths
 
-    plain = run_dir / ATTEMPTS_FILE
-    packed = run_dir / f"{ATTEMPTS_FILE}.gz"
+    plain, packed = attempts_paths(run_dir)
     if not packed.exists():
         return
     if plain.exists():
         raise FileExistsError(
-            f"{run_dir} holds both {ATTEMPTS_FILE} and {packed.name}: keep the one with the "
+            f"{run_dir} holds both {plain.name} and {packed.name}: keep the one with the "
             "run's rows (the larger) and delete the other"
         )
     tmp = plain.with_name(plain.name + ".tmp")

@@ -23,10 +23,16 @@ RUN_FILE = "run.json"
 LOCK_FILE = ".lock"
 
 
+def attempts_paths(run_dir: Path) -> tuple[Path, Path]:
+    """A run's attempts file, plain (appended to while the run goes) and packed (gzipped, as
+    a canonical run keeps it: :func:`hsqbench.experiment.canonical.pack_attempts`)."""
+    plain = run_dir / ATTEMPTS_FILE
+    return plain, plain.with_name(plain.name + ".gz")
+
+
 def has_attempts(run_dir: Path) -> bool:
-    """Whether ``run_dir`` holds a run's attempts, plain or packed (``attempts.csv.gz``: a
-    canonical run, :func:`hsqbench.experiment.canonical.pack_attempts`)."""
-    return (run_dir / ATTEMPTS_FILE).exists() or (run_dir / f"{ATTEMPTS_FILE}.gz").exists()
+    """Whether ``run_dir`` holds a run's attempts, plain or packed."""
+    return any(path.exists() for path in attempts_paths(run_dir))
 
 
 FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")

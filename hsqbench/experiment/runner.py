@@ -28,6 +28,7 @@ from hsqbench.experiment.results import (
     ResultsError,
     ResultStore,
 )
+from hsqbench.experiment.rows import attempts_paths
 from hsqbench.experiment.seeds import TrialSpec, build_trials
 from hsqbench.planner.registry import planner_sources
 from hsqbench.settings import code_version
@@ -299,12 +300,13 @@ def _existing_run(
     folder checks: ``force`` moves an old run aside; without ``resume`` an existing run is an
     error."""
     meta = store.read_meta()
-    if resume and (run_dir / f"{ATTEMPTS_FILE}.gz").exists():
+    plain, packed = attempts_paths(run_dir)
+    if resume and packed.exists():
         raise ResultsError(
             f"{run_dir}: its {ATTEMPTS_FILE} is gzipped (a canonical run): `make results` "
             "unpacks and resumes it, or gunzip it to resume it here"
         )
-    has_data = meta is not None or (run_dir / ATTEMPTS_FILE).exists()
+    has_data = meta is not None or plain.exists()
     if has_data and force:
         moved = _move_aside(run_dir)
         print(f"moved the previous run to {moved}", file=sys.stderr)
