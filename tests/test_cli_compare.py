@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import gzip
 import shutil
 from pathlib import Path
 
@@ -13,53 +14,83 @@ from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedC
 from hsqbench.experiment.runner import run_benchmark
 from tests.fake_backend import FakeBackend
 
-RESULTS = Path(__file__).resolve().parents[1] / "results"
-TURN, REDRAW = RESULTS / "ycb3-turn", RESULTS / "ycb3-redraw"  # hsq at two code versions
+CANON = Path(__file__).resolve().parents[1] / "results" / "ycb3"  # canonical; attempts gzipped
 
 
-def test_two_committed_runs_print_their_transitions(capsys) -> None:
-    assert main(["compare", str(TURN), str(REDRAW), "--fail-if-worse", "--show", "3"]) == 0
-    out = capsys.readouterr().out
-    assert "paired difference B - A" in out
-    iso = next(x for x in out.splitlines() if x.strip().startswith("isolated GSR  hsq"))
-    assert iso.rstrip().endswith("better")  # the later version's new draw of stage one
-    assert "no_grasp_found -> success" in out and "<- changed" in out
-    assert "changed attempts (first 3 of" in out
-    assert main(["compare", str(TURN), str(REDRAW), "--fail-if-changed"]) == 1
-
-
-def _make_worse(src: Path, dst: Path, planner: str, flips: int) -> int:
-    """A copy of ``src`` where ``planner`` fails ``flips`` isolated attempts it succeeded in."""
-    shutil.copytree(src, dst, ignore=shutil.ignore_patterns("*.png", "table*", "*.md"))
-    with open(dst / "attempts.csv", newline="") as f:
+def _read(path: Path) -> tuple[list[str], list[dict[str, str]]]:
+    opener = gzip.open if path.suffix == ".gz" else open
+    with opener(path, "rt", newline="") as f:
         reader = csv.DictReader(f)
-        columns, rows = reader.fieldnames, list(reader)
-    done = 0
-    for r in rows:
-        mine = r["experiment"] == "isolated" and r["planner"] == planner
-        if done < flips and mine and r["success"] == "1":
-            r.update(success="0", outcome="dropped")
-            done += 1
-    with open(dst / "attempts.csv", "w", newline="") as f:
+        return list(reader.fieldnames or []), list(reader)
+
+
+def _write(path: Path, columns: list[str], rows: list[dict[str, str]]) -> None:
+    with open(path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=columns)
         writer.writeheader()
         writer.writerows(rows)
+
+
+@pytest.fixture(scope="module")
+def hsq_run(tmp_path_factory) -> Path:
+    """``results/ycb3`` cut to hsq's rows (an eighth of them), its files written plain."""
+    dst = tmp_path_factory.mktemp("canon") / "ycb3"
+    shutil.copytree(CANON, dst, ignore=shutil.ignore_patterns("*.png", "*.csv", "*.md", "*.gz"))
+    for name, src in (
+        ("attempts.csv", CANON / "attempts.csv.gz"),
+        ("rounds.csv", CANON / "rounds.csv"),
+    ):
+        columns, rows = _read(src)
+        _write(dst / name, columns, [r for r in rows if r["planner"] == "hsq"])
+    return dst
+
+
+def _copy_flipping(src: Path, dst: Path, planner: str, flips: int, old: str, new: str) -> int:
+    """A copy of ``src`` where ``planner``'s first ``flips`` isolated attempts that ended
+    ``old`` end ``new`` instead; returns how many changed."""
+    shutil.copytree(src, dst)
+    columns, rows = _read(src / "attempts.csv")
+    done = 0
+    for r in rows:
+        mine = r["experiment"] == "isolated" and r["planner"] == planner
+        if done < flips and mine and r["outcome"] == old:
+            r.update(success=str(int(new == "success")), outcome=new)
+            done += 1
+    _write(dst / "attempts.csv", columns, rows)
     return done
 
 
-def test_fail_if_worse_exits_non_zero_only_when_b_is_significantly_worse(tmp_path, capsys) -> None:
+def test_a_changed_copy_of_a_committed_run_prints_its_transitions(
+    hsq_run, tmp_path, capsys
+) -> None:
+    better = tmp_path / "better"
+    assert _copy_flipping(hsq_run, better, "hsq", 20, "no_grasp_found", "success") == 20
+    assert main(["compare", str(hsq_run), str(better), "--fail-if-worse", "--show", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "paired difference B - A" in out
+    iso = next(x for x in out.splitlines() if x.strip().startswith("isolated GSR  hsq"))
+    assert iso.rstrip().endswith("better")  # 20 pairs won, none lost
+    assert "no_grasp_found -> success" in out and "<- changed" in out
+    assert "changed attempts (first 3 of 20" in out
+    assert main(["compare", str(hsq_run), str(better), "--fail-if-changed"]) == 1
+    assert main(["compare", str(hsq_run), str(hsq_run), "--fail-if-changed"]) == 0
+
+
+def test_fail_if_worse_exits_non_zero_only_when_b_is_significantly_worse(
+    hsq_run, tmp_path, capsys
+) -> None:
     worse = tmp_path / "worse"
-    assert _make_worse(REDRAW, worse, "hsq", 12) == 12  # 12 of 1,170 pairs lost, none won
-    assert main(["compare", str(REDRAW), str(worse)]) == 0  # reports, does not judge
-    assert main(["compare", str(REDRAW), str(worse), "--fail-if-worse"]) == 1
+    assert _copy_flipping(hsq_run, worse, "hsq", 12, "success", "dropped") == 12  # 0:12 pairs
+    assert main(["compare", str(hsq_run), str(worse)]) == 0  # reports, does not judge
+    assert main(["compare", str(hsq_run), str(worse), "--fail-if-worse"]) == 1
     out = capsys.readouterr().out
     assert "FAIL: B is significantly worse than A for hsq (isolated GSR)" in out
     assert "success -> dropped" in out
     # The other way round B is better: no failure.
-    assert main(["compare", str(worse), str(REDRAW), "--fail-if-worse"]) == 0
+    assert main(["compare", str(worse), str(hsq_run), "--fail-if-worse"]) == 0
     few = tmp_path / "few"
-    _make_worse(REDRAW, few, "hsq", 3)  # 0:3 discordant pairs, p = 0.25: not significant
-    assert main(["compare", str(REDRAW), str(few), "--fail-if-worse"]) == 0
+    _copy_flipping(hsq_run, few, "hsq", 3, "success", "dropped")  # 0:3 pairs, p = 0.25
+    assert main(["compare", str(hsq_run), str(few), "--fail-if-worse"]) == 0
 
 
 CONFIG = ExperimentConfig(
@@ -86,14 +117,14 @@ def test_identical_runs_pass_fail_if_changed_and_changed_ones_list_their_attempt
     assert "success -> " in out and "changed attempts (first" in out
 
 
-def test_bad_input_is_one_line(tmp_path, capsys) -> None:
-    assert main(["compare", str(tmp_path / "nope"), str(REDRAW)]) == 2
+def test_bad_input_is_one_line(hsq_run, tmp_path, capsys) -> None:
+    assert main(["compare", str(tmp_path / "nope"), str(hsq_run)]) == 2
     assert "is not a folder" in capsys.readouterr().err
-    assert main(["compare", str(REDRAW), str(REDRAW), "--columns", "outcome,wrong"]) == 2
+    assert main(["compare", str(hsq_run), str(hsq_run), "--columns", "outcome,wrong"]) == 2
     assert "--columns wrong" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("flag", ["--fail-if-worse", "--fail-if-changed"])
-def test_a_run_against_itself_passes(flag, capsys) -> None:
-    assert main(["compare", str(REDRAW), str(REDRAW), flag]) == 0
+def test_a_run_against_itself_passes(hsq_run, flag, capsys) -> None:
+    assert main(["compare", str(hsq_run), str(hsq_run), flag]) == 0
     assert "changed: 0" in capsys.readouterr().out

@@ -261,18 +261,39 @@ def test_rows_carry_the_grasp_pose_scores_and_stage_times() -> None:
     assert table.shape == (2, 7) and np.isnan(table[1]).all()
 
 
-def test_a_committed_run_from_before_the_grasp_columns_loads_with_them_empty() -> None:
-    from pathlib import Path
+def test_a_packed_run_from_before_the_grasp_columns_loads_with_them_empty(tmp_path) -> None:
+    """Committed runs are gzipped and may predate columns: both at once still read."""
+    import gzip
+    from dataclasses import replace
 
     import numpy as np
 
     from hsqbench.experiment.rows import pose_table
 
-    run = Path(__file__).resolve().parents[1] / "results" / "ycb3-redraw"
-    rows = load_results(run).attempts
-    assert rows and all(r["grasp_pose"] == "" and r["top_scores"] == "" for r in rows)
+    store = _store(tmp_path)
+    run = _run(ISO)
+    run.result.attempts[0] = replace(
+        run.result.attempts[0], grasp_pose=(0.52, 0.08, 0.07, 0.0, 1.0, 0.0, 0.0), ranks_tried=2
+    )
+    store.append(run, "h", "v")
+    store.append(_run(PACKED), "h", "v")
+    with open(store.attempts_path, newline="") as f:
+        table = list(csv.DictReader(f))
+    assert table[0]["grasp_pose"] and table[0]["ranks_tried"] == "2"
+    # The columns that runs made before the grasp columns lack.
+    newer = {"grasp_pose", "grasp_flipped", "grasp_pose_object", "top_scores"}
+    newer |= {"motion_planning_s", "sim_time_s", "planner_stages_s", "ranks_tried"}
+    older = [c for c in ATTEMPT_COLUMNS if c not in newer]
+    with gzip.open(store.attempts_path.with_name("attempts.csv.gz"), "wt", newline="") as f:
+        writer = csv.DictWriter(f, older, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(table)
+    store.attempts_path.unlink()
+    rows = load_results(store.run_dir).attempts
+    assert len(rows) == len(table)
+    assert all(r[c] == "" for r in rows for c in newer)
     assert np.isnan(pose_table([r["grasp_pose"] for r in rows])).all()
-    assert all(r["outcome"] for r in rows if r["status"] == "ok")  # its own columns are read
+    assert [r["outcome"] for r in rows] == [r["outcome"] for r in table]  # its own columns
 
 
 def test_every_column_is_documented() -> None:
