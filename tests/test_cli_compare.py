@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import csv
-import gzip
+import io
 import shutil
 from pathlib import Path
 
@@ -11,6 +11,7 @@ import pytest
 
 from hsqbench.cli import main
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
+from hsqbench.experiment.rows import read_packed
 from hsqbench.experiment.runner import run_benchmark
 from tests.fake_backend import FakeBackend
 
@@ -18,10 +19,10 @@ CANON = Path(__file__).resolve().parents[1] / "results" / "ycb3"  # canonical; a
 
 
 def _read(path: Path) -> tuple[list[str], list[dict[str, str]]]:
-    opener = gzip.open if path.suffix == ".gz" else open
-    with opener(path, "rt", newline="") as f:
-        reader = csv.DictReader(f)
-        return list(reader.fieldnames or []), list(reader)
+    """A run's CSV, plain or packed (a ``.gz`` path, whole or in pieces)."""
+    data = read_packed(path) if path.suffix == ".gz" else path.read_bytes()
+    reader = csv.DictReader(io.StringIO(data.decode()))
+    return list(reader.fieldnames or []), list(reader)
 
 
 def _write(path: Path, columns: list[str], rows: list[dict[str, str]]) -> None:
@@ -35,7 +36,7 @@ def _write(path: Path, columns: list[str], rows: list[dict[str, str]]) -> None:
 def hsq_run(tmp_path_factory) -> Path:
     """``results/ycb3`` cut to hsq's rows (an eighth of them), its files written plain."""
     dst = tmp_path_factory.mktemp("canon") / "ycb3"
-    shutil.copytree(CANON, dst, ignore=shutil.ignore_patterns("*.png", "*.csv", "*.md", "*.gz"))
+    shutil.copytree(CANON, dst, ignore=shutil.ignore_patterns("*.png", "*.csv", "*.md", "*.gz*"))
     for name, src in (
         ("attempts.csv", CANON / "attempts.csv.gz"),
         ("rounds.csv", CANON / "rounds.csv"),

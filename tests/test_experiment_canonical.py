@@ -94,14 +94,44 @@ def test_packing_is_reproducible_and_unpacking_restores_the_file(tmp_path):
     run.mkdir()
     text = b"trial_key,outcome\na,success\nb,empty\n"
     (run / "attempts.csv").write_bytes(text)
-    first = pack_attempts(run).read_bytes()
+    [packed] = pack_attempts(run)
+    first = packed.read_bytes()
+    assert packed.name == "attempts.csv.gz"
     assert not (run / "attempts.csv").exists() and gzip.decompress(first) == text
     unpack_attempts(run)
     assert (run / "attempts.csv").read_bytes() == text and not (run / "attempts.csv.gz").exists()
-    assert pack_attempts(run).read_bytes() == first  # no time or name in the header
+    assert pack_attempts(run)[0].read_bytes() == first  # no time or name in the header
     (run / "attempts.csv").write_bytes(text)
     with pytest.raises(FileExistsError, match=r"both attempts\.csv and attempts\.csv\.gz"):
         unpack_attempts(run)
+
+
+def test_a_large_packed_file_is_stored_in_pieces_that_read_as_one(tmp_path, monkeypatch):
+    from hsqbench.experiment import rows
+    from hsqbench.experiment.results import ATTEMPT_COLUMNS, read_rows
+
+    monkeypatch.setattr(rows, "PACKED_PIECE_BYTES", 200)
+    run = tmp_path / "r"
+    run.mkdir()
+    keys = [f"isolated/hsq/s0/obj{i:04d}/{i * 7919 % 1000:03d}" for i in range(300)]
+    lines = [",".join(ATTEMPT_COLUMNS)] + [k + "," * (len(ATTEMPT_COLUMNS) - 1) for k in keys]
+    text = ("\n".join(lines) + "\n").encode()
+    (run / "attempts.csv").write_bytes(text)
+    pieces = pack_attempts(run)
+    assert [p.name for p in pieces] == [f"attempts.csv.gz.{i:02d}" for i in range(len(pieces))]
+    assert len(pieces) > 2 and all(p.stat().st_size <= 200 for p in pieces)
+    assert rows.has_attempts(run) and not (run / "attempts.csv.gz").exists()
+    parsed = read_rows(run / "attempts.csv", ATTEMPT_COLUMNS)  # readers join the pieces
+    assert [r["trial_key"] for r in parsed.rows] == keys
+    before = [p.read_bytes() for p in pieces]
+    unpack_attempts(run)
+    assert (run / "attempts.csv").read_bytes() == text
+    assert not list(run.glob("attempts.csv.gz*"))
+    assert [p.read_bytes() for p in pack_attempts(run)] == before
+    # Under a larger limit the same rows pack into one file, and no old piece is left behind.
+    monkeypatch.setattr(rows, "PACKED_PIECE_BYTES", 1 << 20)
+    assert rows.write_packed(run / "attempts.csv.gz", text) == [run / "attempts.csv.gz"]
+    assert sorted(p.name for p in run.iterdir()) == ["attempts.csv.gz"]
 
 
 def test_dry_run_states_the_expected_time_and_unknown_names_fail(capsys):

@@ -9,8 +9,8 @@ Unlike ``hsqbench benchmark``, a canonical run does not leave out a planner whos
 is missing: the tables would lack a row, so it stops first and says which extra to install.
 
 A finished run's ``attempts.csv`` is stored gzipped (``attempts.csv.gz``, byte-reproducible: no
-name or time in its header): the committed runs stay a few MB, and every reader takes either
-form. The next ``make results`` unpacks it, resumes (nothing to do when complete) and packs again.
+name or time in its header; in pieces ``attempts.csv.gz.00``, ... where it would pass 2 MiB):
+the committed runs stay a few MB, and every reader takes either form. The next ``make results`` unpacks it, resumes (nothing to do when complete) and packs again.
 
     python -m hsqbench.experiment.canonical [--out results] [--only paper3 ...] [--jobs N]
     python -m hsqbench.experiment.canonical --protocol quick --out /tmp/x   # the logic, fast
@@ -19,7 +19,6 @@ form. The next ``make results`` unpacks it, resumes (nothing to do when complete
 from __future__ import annotations
 
 import argparse
-import gzip
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -94,35 +93,35 @@ def missing_planners(canon: Canonical, protocol: str | None = None) -> dict[str,
     return missing
 
 
-def pack_attempts(run_dir: Path) -> Path:
-    """Replace ``run_dir/attempts.csv`` by ``attempts.csv.gz`` (level 9, mtime 0, no file name:
-    the same rows give the same bytes); returns the packed file."""
-    from hsqbench.experiment.rows import attempts_paths
+def pack_attempts(run_dir: Path) -> list[Path]:
+    """Replace ``run_dir/attempts.csv`` by ``attempts.csv.gz`` (byte-reproducible; in pieces
+    ``attempts.csv.gz.00``, ... where it would pass 2 MiB); returns the files written."""
+    from hsqbench.experiment.rows import attempts_paths, write_packed
 
     plain, packed = attempts_paths(run_dir)
-    tmp = packed.with_name(packed.name + ".tmp")
-    tmp.write_bytes(gzip.compress(plain.read_bytes(), compresslevel=9, mtime=0))
-    tmp.replace(packed)  # the packed file is whole before the plain one goes
+    written = write_packed(packed, plain.read_bytes())  # whole before the plain file goes
     plain.unlink()
-    return packed
+    return written
 
 
 def unpack_attempts(run_dir: Path) -> None:
     """Undo :func:`pack_attempts` so that the run can be resumed (a no-op on a plain run)."""
-    from hsqbench.experiment.rows import attempts_paths
+    from hsqbench.experiment.rows import attempts_paths, packed_files, read_packed
 
     plain, packed = attempts_paths(run_dir)
-    if not packed.exists():
+    files = packed_files(packed)
+    if not files:
         return
     if plain.exists():
         raise FileExistsError(
-            f"{run_dir} holds both {plain.name} and {packed.name}: keep the one with the "
+            f"{run_dir} holds both {plain.name} and {files[0].name}: keep the one with the "
             "run's rows (the larger) and delete the other"
         )
     tmp = plain.with_name(plain.name + ".tmp")
-    tmp.write_bytes(gzip.decompress(packed.read_bytes()))
+    tmp.write_bytes(read_packed(packed))
     tmp.replace(plain)
-    packed.unlink()
+    for f in files:
+        f.unlink()
 
 
 def make_results(

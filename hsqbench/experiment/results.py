@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import gzip
 import io
 import json
 import os
@@ -48,6 +47,8 @@ from hsqbench.experiment.rows import (
     STATUS_ERROR,
     STATUS_OK,
     VOLATILE_COLUMNS,
+    packed_files,
+    read_packed,
     rows_for,
 )
 
@@ -121,7 +122,7 @@ class ParsedFile:
 def read_rows(path: Path, columns: tuple[str, ...], allow_older: bool = False) -> ParsedFile:
     """Parse a results CSV, dropping a trailing partial line (a write cut by a kill).
 
-    ``path`` or, when it is absent, ``path`` + ``.gz`` is read.
+    ``path`` or, when it is absent, ``path`` + ``.gz`` (whole or in pieces) is read.
     ``allow_older``: a file written by an earlier version, whose columns are a subset of
     ``columns``, is read with the missing columns empty (for reports; never for appending).
 
@@ -129,10 +130,10 @@ def read_rows(path: Path, columns: tuple[str, ...], allow_older: bool = False) -
         ResultsError: the header differs from ``columns`` or a complete line is malformed.
     """
     packed = path.with_name(path.name + ".gz")
-    if not path.exists() and not packed.exists():
+    if not path.exists() and not packed_files(packed):
         return ParsedFile()
     # A committed run may hold its CSV gzipped (large runs); it is read, never appended to.
-    data = path.read_bytes() if path.exists() else gzip.decompress(packed.read_bytes())
+    data = path.read_bytes() if path.exists() else read_packed(packed)
     partial = bool(data) and not data.endswith(b"\n")
     if partial:
         data = data[: data.rfind(b"\n") + 1]

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import gzip
 import json
 import math
 from datetime import UTC, datetime
@@ -23,6 +24,11 @@ RUN_FILE = "run.json"
 LOCK_FILE = ".lock"
 
 
+# A packed file larger than this is stored as numbered pieces (``NAME.00``, ``NAME.01``, ...):
+# consecutive bytes of one gzip stream, each under the 2 MiB a tracked file may take.
+PACKED_PIECE_BYTES = 1_835_008  # 1.75 MiB
+
+
 def attempts_paths(run_dir: Path) -> tuple[Path, Path]:
     """A run's attempts file, plain (appended to while the run goes) and packed (gzipped, as
     a canonical run keeps it: :func:`hsqbench.experiment.canonical.pack_attempts`)."""
@@ -30,9 +36,49 @@ def attempts_paths(run_dir: Path) -> tuple[Path, Path]:
     return plain, plain.with_name(plain.name + ".gz")
 
 
+def packed_files(packed: Path) -> list[Path]:
+    """The files that hold ``packed`` (a ``.gz`` path): itself, or its pieces in order; [] if
+    neither is there."""
+    if packed.exists():
+        return [packed]
+    return sorted(packed.parent.glob(f"{packed.name}.[0-9][0-9]"))
+
+
+def read_packed(packed: Path) -> bytes:
+    """The uncompressed bytes of ``packed``, whole or in pieces."""
+    files = packed_files(packed)
+    if not files:
+        raise FileNotFoundError(f"{packed}: no such file, nor pieces {packed.name}.00, ...")
+    return gzip.decompress(b"".join(f.read_bytes() for f in files))
+
+
+def write_packed(packed: Path, data: bytes) -> list[Path]:
+    """Write ``data`` gzipped to ``packed`` (level 9, mtime 0: the same bytes give the same
+    files), in pieces when it is larger than :data:`PACKED_PIECE_BYTES`; replaces whatever held
+    ``packed`` before and returns the files written."""
+    blob = gzip.compress(data, compresslevel=9, mtime=0)
+    if len(blob) <= PACKED_PIECE_BYTES:
+        chunks = {packed: blob}
+    else:
+        starts = range(0, len(blob), PACKED_PIECE_BYTES)
+        chunks = {
+            packed.with_name(f"{packed.name}.{i:02d}"): blob[start : start + PACKED_PIECE_BYTES]
+            for i, start in enumerate(starts)
+        }
+    for old in packed_files(packed):
+        if old not in chunks:
+            old.unlink()
+    for path, chunk in chunks.items():
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_bytes(chunk)
+        tmp.replace(path)
+    return list(chunks)
+
+
 def has_attempts(run_dir: Path) -> bool:
     """Whether ``run_dir`` holds a run's attempts, plain or packed."""
-    return any(path.exists() for path in attempts_paths(run_dir))
+    plain, packed = attempts_paths(run_dir)
+    return plain.exists() or bool(packed_files(packed))
 
 
 FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")

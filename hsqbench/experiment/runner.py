@@ -28,7 +28,7 @@ from hsqbench.experiment.results import (
     ResultsError,
     ResultStore,
 )
-from hsqbench.experiment.rows import attempts_paths
+from hsqbench.experiment.rows import attempts_paths, packed_files
 from hsqbench.experiment.seeds import TrialSpec, build_trials
 from hsqbench.planner.registry import planner_sources
 from hsqbench.settings import code_version
@@ -301,7 +301,7 @@ def _existing_run(
     error."""
     meta = store.read_meta()
     plain, packed = attempts_paths(run_dir)
-    if resume and packed.exists():
+    if resume and packed_files(packed):
         raise ResultsError(
             f"{run_dir}: its {ATTEMPTS_FILE} is gzipped (a canonical run): `make results` "
             "unpacks and resumes it, or gunzip it to resume it here"
