@@ -286,3 +286,39 @@ def test_learned_views_points_are_valid_and_the_near_cameras_look_at_the_workspa
         assert np.degrees(np.arccos(offset[2] / np.linalg.norm(offset))) == pytest.approx(
             30, abs=0.1
         )
+
+
+def test_isolated_points_are_paired_with_the_default_point(tmp_path, sweep):
+    root = tmp_path / "sw"
+    run_sweep(sweep, root, backend_factory=fake, progress=False)
+    table = pd.read_csv(root / CSV_FILE)
+    paired = [c for c in table.columns if c.startswith("vs_default_")]
+    # Parameter p has no point without overrides: nothing to pair with.
+    assert table.loc[table["parameter"] == "p", paired].isna().all().all()
+    q = table[table["parameter"] == "q"].set_index(["value", "planner"])
+    assert q.loc["default", paired].isna().all().all()  # the default against itself
+    for planner in ("a", "b"):
+        low = q.loc[("low", planner)]
+        by_key = {}
+        for label in ("low", "default"):
+            rows = load_results(root / q.loc[(label, planner), "run"]).attempts
+            by_key[label] = {
+                r["trial_key"]: r["success"] == "1"
+                for r in rows
+                if r["planner"] == planner and r["experiment"] == "isolated"
+            }
+        keys = sorted(by_key["default"])
+        assert sorted(by_key["low"]) == keys  # the same presentations at both points
+        mine = np.array([by_key["low"][k] for k in keys])
+        ref = np.array([by_key["default"][k] for k in keys])
+        assert low["vs_default_pp"] == pytest.approx(100 * (mine.mean() - ref.mean()), abs=0.01)
+        assert low["vs_default_ci_low_pp"] <= low["vs_default_pp"] <= low["vs_default_ci_high_pp"]
+    # Planner a succeeds with p 0.1 against 0.8 at the default: a clear loss.
+    assert q.loc[("low", "a"), "vs_default_verdict"] == "worse"
+    assert q.loc[("low", "a"), "vs_default_p"] < 0.05
+    # sweep.md shows the same: the default marked, a's loss at "low" in bold with its p.
+    md = (root / "sweep.md").read_text()
+    assert "| default (default) |" in md
+    [low_line] = [x for x in md.splitlines() if x.startswith("| low |")]
+    a_cell = low_line.split(" | ")[1]
+    assert a_cell.startswith(f"{q.loc[('low', 'a'), 'gsr_percent']:.1f} (") and "; **" in a_cell

@@ -106,7 +106,7 @@ def _add_execution(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--report-only",
         action="store_true",
-        help="only rewrite sweep.csv and the plots from the runs already in the folder",
+        help="only rewrite sweep.csv, sweep.md and the plots from the runs already in the folder",
     )
 
 
@@ -192,7 +192,8 @@ def run(args: argparse.Namespace) -> int:
     root = Path(args.run) if "/" in args.run else RESULTS_DIR / args.run
     if args.report_only:
         written = write_sweep_report(root)
-        print(f"sweep report: {written[0]} (+{len(written) - 1} plots)")
+        plots = sum(p.suffix == ".png" for p in written)
+        print(f"sweep report: {written[0]}, {written[1].name} and {plots} plots")
         return 0
     if args.planners:  # names, or plugin specs registered here (and in the workers)
         from hsqbench.planner.registry import resolve_planners

@@ -35,6 +35,7 @@ from hsqbench.experiment.sweep_config import SweepConfig, SweepParameter, SweepP
 
 SWEEP_FILE = "sweep.json"
 CSV_FILE = "sweep.csv"
+MARKDOWN_FILE = "sweep.md"
 RUNS_DIR = "runs"
 
 #: Makes the backend of a point: (trial config name, overrides) -> backend.
@@ -288,7 +289,9 @@ def _elapsed(seconds: float) -> str:
 
 
 def write_sweep_report(root: str | Path) -> list[Path]:
-    """``sweep.csv`` and one PNG per parameter from the runs recorded in ``sweep.json``."""
+    """``sweep.csv``, ``sweep.md`` and one PNG per parameter from the runs recorded in
+    ``sweep.json``."""
+    from hsqbench.experiment.sweep_markdown import sweep_markdown
     from hsqbench.experiment.sweep_plot import plot_parameter
     from hsqbench.experiment.sweep_table import sweep_table
 
@@ -302,6 +305,10 @@ def write_sweep_report(root: str | Path) -> list[Path]:
     tmp = root / f".{CSV_FILE}.tmp"
     table.to_csv(tmp, index=False, float_format="%.4g")
     tmp.replace(written[0])
+    written.append(root / MARKDOWN_FILE)
+    tmp = root / f".{MARKDOWN_FILE}.tmp"
+    tmp.write_text(sweep_markdown(table, meta))
+    tmp.replace(written[-1])
     for name, param in meta["parameters"].items():
         rows = table[table["parameter"] == name]
         if len(rows):

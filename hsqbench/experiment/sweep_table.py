@@ -5,6 +5,12 @@ point's label, ``x`` its position on the plot (empty for categories such as the 
 Isolated: GSR (successful attempts / attempts). Packed: GSR over all attempts of the rounds, and
 CR (objects cleared / objects presented). Error rows (infrastructure failures) are counted in
 ``errors`` and left out of the rates, as in the report's tables.
+
+Every point runs the same presentations, so an isolated point is also paired with its
+parameter's default point (the one without overrides), presentation by presentation:
+``vs_default_*`` hold the GSR difference in percentage points with Newcombe's interval, the
+exact McNemar p and the verdict (:mod:`hsqbench.experiment.paired`); empty at the default itself,
+for packed rows and where a sweep has no default point.
 """
 
 from __future__ import annotations
@@ -15,8 +21,10 @@ from typing import Any
 
 import pandas as pd
 
+from hsqbench.experiment.paired import PairedDifference
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.rows import has_attempts
+from hsqbench.experiment.run_data import RunData, load_run
 from hsqbench.experiment.stats import Rate
 
 COLUMNS = (
@@ -38,6 +46,11 @@ COLUMNS = (
     "cr_percent",
     "cr_ci_low_percent",
     "cr_ci_high_percent",
+    "vs_default_pp",
+    "vs_default_ci_low_pp",
+    "vs_default_ci_high_pp",
+    "vs_default_p",
+    "vs_default_verdict",
     "errors",
     "confidence",
     "run",
@@ -56,11 +69,8 @@ def _rate(k: int, n: int, confidence: float, prefix: str) -> dict[str, float]:
     }
 
 
-def run_rows(run_dir: Path, experiments: list[str]) -> list[dict[str, Any]]:
+def run_rows(data: RunData, experiments: list[str]) -> list[dict[str, Any]]:
     """Per experiment and planner of one run: n, successes, GSR (and CR) with intervals."""
-    from hsqbench.experiment.report import load_run
-
-    data = load_run(run_dir)
     rows = []
     a, r = data.attempts, data.rounds
     for experiment in experiments:
@@ -97,16 +107,53 @@ def run_rows(run_dir: Path, experiments: list[str]) -> list[dict[str, Any]]:
     return rows
 
 
+def _isolated_successes(data: RunData, planner: str) -> pd.Series:
+    """``planner``'s isolated outcomes (True: success) by trial key, error rows left out."""
+    a = data.attempts
+    ok = a[(a["experiment"] == "isolated") & (a["planner"] == planner) & (a["status"] == STATUS_OK)]
+    return ok.set_index("trial_key")["success"].astype(bool)
+
+
+def _vs_default(data: RunData, default: RunData, planner: str) -> dict[str, Any]:
+    """The ``vs_default_*`` columns of ``planner`` (isolated GSR, paired on trial keys)."""
+    mine, ref = _isolated_successes(data, planner), _isolated_successes(default, planner)
+    keys = mine.index.intersection(ref.index)
+    if not len(keys):
+        return {}
+    d = PairedDifference.of(mine[keys].to_numpy(), ref[keys].to_numpy(), data.confidence)
+    return {
+        "vs_default_pp": 100 * d.difference,
+        "vs_default_ci_low_pp": 100 * d.low,
+        "vs_default_ci_high_pp": 100 * d.high,
+        "vs_default_p": d.p_value,
+        "vs_default_verdict": d.verdict,
+    }
+
+
 def sweep_table(root: Path, meta: dict[str, Any]) -> pd.DataFrame:
     """Every recorded point whose run has results; points not run yet are left out."""
+    loaded: dict[str, RunData | None] = {}
+
+    def run(rel: str | None) -> RunData | None:
+        if rel is not None and rel not in loaded:
+            loaded[rel] = load_run(root / rel) if has_attempts(root / rel) else None
+        return loaded.get(rel) if rel is not None else None
+
     rows = []
     for name, param in meta["parameters"].items():
+        default = next((p["runs"] for p in param["points"] if not p["overrides"]), {})
         for i, point in enumerate(param["points"]):
             for protocol, rel in point["runs"].items():
-                run_dir = root / rel
-                if not has_attempts(run_dir):
+                data = run(rel)
+                if data is None:
                     continue
-                for row in run_rows(run_dir, param["experiments"]):
+                ref = run(default.get(protocol))
+                for row in run_rows(data, param["experiments"]):
+                    paired = (
+                        _vs_default(data, ref, row["planner"])
+                        if ref is not None and ref is not data and row["experiment"] == "isolated"
+                        else {}
+                    )
                     rows.append(
                         {
                             "protocol": protocol,
@@ -117,6 +164,7 @@ def sweep_table(root: Path, meta: dict[str, Any]) -> pd.DataFrame:
                             "overrides": json.dumps(point["overrides"], sort_keys=True),
                             "run": rel,
                             **row,
+                            **paired,
                         }
                     )
     return pd.DataFrame(rows, columns=list(COLUMNS))

@@ -1,0 +1,58 @@
+"""``sweep.md``: the sweep table as Markdown, one table per parameter and protocol; each cell the
+planner's rate at the point and, for isolated points, its paired difference to the default point
+(bold when McNemar's test calls it a difference)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from hsqbench.experiment.front_page import _markdown, _p, _signed
+from hsqbench.experiment.paired import SAME
+
+
+def _cell(r: Any) -> str:
+    rate = f"{r.gsr_percent:.1f} ({int(r.successes)}/{int(r.n)})" if r.n else "no attempts"
+    if np.isfinite(r.cr_percent):
+        rate += f", CR {r.cr_percent:.1f}"
+    if not np.isfinite(r.vs_default_pp):
+        return rate
+    diff = f"{_signed(r.vs_default_pp)} [{_signed(r.vs_default_ci_low_pp)}, "
+    diff += f"{_signed(r.vs_default_ci_high_pp)}]"
+    if r.vs_default_verdict != SAME:
+        diff = f"**{diff}**"
+    return f"{rate}; {diff}, p {_p(r.vs_default_p)}"
+
+
+def sweep_markdown(table: pd.DataFrame, meta: dict[str, Any]) -> str:
+    """The Markdown of ``sweep.csv``'s rows (``table``) for the sweep described by ``meta``."""
+    lines = [
+        "# Sweep results",
+        "",
+        "Per point and planner: GSR % (successes/n; packed: and CR %) and, for isolated points, "
+        "the paired difference to the parameter's default point on the same presentations, "
+        "in percentage points with its 95 % interval (Newcombe) and the exact McNemar p; bold: "
+        "a difference at that level. Intervals of the rates are in sweep.csv.",
+    ]
+    for name, param in meta["parameters"].items():
+        rows = table[table["parameter"] == name]
+        if not len(rows):
+            continue
+        default = next((p["label"] for p in param["points"] if not p["overrides"]), None)
+        lines += ["", f"## {name}: {param.get('axis', name)}", "", f"![{name}]({name}.png)"]
+        for (protocol, experiment), part in rows.groupby(["protocol", "experiment"], sort=False):
+            planners = list(dict.fromkeys(part["planner"]))
+            body = []
+            for label, point in part.groupby("value", sort=False):
+                cells = {r.planner: _cell(r) for r in point.itertuples()}
+                shown = f"{label} (default)" if label == default else str(label)
+                body.append([shown, *(cells.get(p, "") for p in planners)])
+            lines += [
+                "",
+                f"**{protocol}, {experiment}**",
+                "",
+                _markdown(["point", *planners], body),
+            ]
+    return "\n".join(lines) + "\n"
