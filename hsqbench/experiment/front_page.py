@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from hsqbench.experiment.graspable import method_label
+from hsqbench.experiment.markdown import md_table, p_text, signed_pp
 from hsqbench.experiment.paired_table import DEFAULT_REFERENCE, PAIRED_CSV
 from hsqbench.experiment.pile_table import TABLE4_CSV
 from hsqbench.experiment.report import TABLE1_CSV, TABLE2_CSV
@@ -78,7 +79,7 @@ class Run:
         if rows.empty:
             return ""
         r = rows.iloc[0]
-        return f"{_signed(r.difference_pp)} [{_signed(r.ci_low_pp)}, {_signed(r.ci_high_pp)}], p {_p(r.p_value)}"
+        return f"{signed_pp(r.difference_pp)} [{signed_pp(r.ci_low_pp)}, {signed_pp(r.ci_high_pp)}], p {p_text(r.p_value)}"
 
     def measured_line(self) -> str:
         m = self.meta
@@ -92,14 +93,6 @@ class Run:
         )
 
 
-def _signed(v: float) -> str:
-    return f"{v:+.1f}".replace("-", "\u2212")  # a typographic minus, as the README's prose
-
-
-def _p(p: float) -> str:
-    return f"{p:.0e}" if p < 1e-3 else f"{p:.3f}"
-
-
 def _pct(v: float) -> str:
     return "" if not np.isfinite(v) else f"{v:.1f}"
 
@@ -110,12 +103,6 @@ def _ci(low: float, high: float) -> str:
 
 def _kn(k: float, n: float) -> str:
     return "" if not np.isfinite(n) or n == 0 else f"{int(k)}/{int(n)}"
-
-
-def _markdown(headers: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(headers) + " |", "|" + " --- |" * len(headers)]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines)
 
 
 #: A table's middle columns: (header, cell of a report CSV row).
@@ -168,7 +155,7 @@ def _render(run: Run, csv: str, columns: Columns, comparison: str, reported: boo
         )
     what = comparison.split()[-1]
     paired = "vs hsq, paired (pp)" if what == "GSR" else f"{what} vs hsq, paired (pp)"
-    return _markdown(["planner", *(h for h, _ in columns), "source", paired], rows)
+    return md_table(["planner", *(h for h, _ in columns), "source", paired], rows)
 
 
 def isolated_table(run: Run, reported: bool = True) -> str:

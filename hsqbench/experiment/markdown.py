@@ -15,10 +15,21 @@ from hsqbench.sim.outcome import Outcome
 OUTCOME_COLUMNS = (*[str(o) for o in Outcome], "error")
 
 
-def _md(headers: list[str], rows: list[list[str]]) -> str:
+def md_table(headers: list[str], rows: list[list[str]]) -> str:
+    """A Markdown table (every report, the README's blocks and sweep.md write theirs with it)."""
     lines = ["| " + " | ".join(headers) + " |", "|" + "|".join(" --- " for _ in headers) + "|"]
     lines += ["| " + " | ".join(r) + " |" for r in rows]
     return "\n".join(lines)
+
+
+def signed_pp(v: float) -> str:
+    """``+1.2`` / ``−1.2``: a difference in percentage points, with a typographic minus."""
+    return f"{v:+.1f}".replace("-", "\u2212")
+
+
+def p_text(p: float) -> str:
+    """A p-value as the tables print it: ``3e-05`` below 0.001, else ``0.012``."""
+    return f"{p:.0e}" if p < 1e-3 else f"{p:.3f}"
 
 
 def _pct(value: float) -> str:
@@ -104,7 +115,7 @@ def _table1(data: RunData, t1: pd.DataFrame, conf: str, graspability: bool) -> l
     heads = ["method", "GSR", f"{conf} CI", "k/n"]
     if graspability:
         heads += ["GSR graspable", f"{conf} CI", "k/n graspable"]
-    out += [_md([*heads, "errors", "source"], rows), ""]
+    out += [md_table([*heads, "errors", "source"], rows), ""]
     return out
 
 
@@ -136,7 +147,7 @@ def _table1_per_object(data: RunData, t1o: pd.DataFrame, graspability: bool) -> 
                 cells.append("—")
         rows.append(cells)
     heads = ["object", *(["graspable"] if graspability else []), *planners]
-    out += [_md(heads, rows), ""]
+    out += [md_table(heads, rows), ""]
     return out
 
 
@@ -171,7 +182,7 @@ def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> l
     if graspability:
         headers += ["GSR graspable", f"{conf} CI", "CR graspable", f"{conf} CI"]
     headers += ["rounds", "errors"]
-    out += [_md([*headers, "source"], rows), ""]
+    out += [md_table([*headers, "source"], rows), ""]
     return out
 
 
@@ -185,7 +196,7 @@ def _outcomes(outcomes: pd.DataFrame) -> list[str]:
         [r["experiment"], r["planner"], *[str(int(r[c])) for c in cols]]
         for _, r in outcomes.iterrows()
     ]
-    out += [_md(["experiment", "planner", *cols], rows), ""]
+    out += [md_table(["experiment", "planner", *cols], rows), ""]
     return out
 
 
@@ -205,7 +216,7 @@ def _times(times: pd.DataFrame) -> list[str]:
         ]
         for _, r in times.iterrows()
     ]
-    out += [_md(["experiment", "planner", "n", "median", "p90", "max"], rows), ""]
+    out += [md_table(["experiment", "planner", "n", "median", "p90", "max"], rows), ""]
     return out
 
 

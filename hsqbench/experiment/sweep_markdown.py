@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from hsqbench.experiment.front_page import _markdown, _p, _signed
+from hsqbench.experiment.markdown import md_table, p_text, signed_pp
 from hsqbench.experiment.paired import SAME
 
 
@@ -19,11 +19,11 @@ def _cell(r: Any) -> str:
         rate += f", CR {r.cr_percent:.1f}"
     if not np.isfinite(r.vs_default_pp):
         return rate
-    diff = f"{_signed(r.vs_default_pp)} [{_signed(r.vs_default_ci_low_pp)}, "
-    diff += f"{_signed(r.vs_default_ci_high_pp)}]"
+    diff = f"{signed_pp(r.vs_default_pp)} [{signed_pp(r.vs_default_ci_low_pp)}, "
+    diff += f"{signed_pp(r.vs_default_ci_high_pp)}]"
     if r.vs_default_verdict != SAME:
         diff = f"**{diff}**"
-    return f"{rate}; {diff}, p {_p(r.vs_default_p)}"
+    return f"{rate}; {diff}, p {p_text(r.vs_default_p)}"
 
 
 def sweep_markdown(table: pd.DataFrame, meta: dict[str, Any]) -> str:
@@ -53,6 +53,6 @@ def sweep_markdown(table: pd.DataFrame, meta: dict[str, Any]) -> str:
                 "",
                 f"**{protocol}, {experiment}**",
                 "",
-                _markdown(["point", *planners], body),
+                md_table(["point", *planners], body),
             ]
     return "\n".join(lines) + "\n"
