@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
@@ -28,7 +29,7 @@ from tests.fake_backend import FakeBackend
 CONFIG = ExperimentConfig(
     planners=("hsq", "antipodal"),
     isolated=IsolatedConfig(objects=("mug", "bowl", "apple"), attempts_per_object=4),
-    packed=PackedConfig(objects=("mug", "bowl", "pear", "banana"), rounds=4, objects_per_round=3),
+    packed=PackedConfig(objects=("mug", "bowl", "hammer", "banana"), rounds=4, objects_per_round=3),
 )
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -121,6 +122,33 @@ def test_tables_hold_reported_and_measured_rows_with_intervals(run_dir: Path) ->
     assert (
         t2["GIGA"]["source"] == "reported, real robot" and float(t2["GIGA"]["cr_percent"]) == 86.6
     )
+
+
+def test_a_run_on_other_objects_shows_no_reported_rows(tmp_path: Path) -> None:
+    """The paper's rows describe its 15 objects: packed rounds that draw another object, and
+    the headline plot of such a run, leave them out and say why."""
+    from hsqbench.experiment.plots.headline import reported_points
+    from hsqbench.experiment.run_data import load_run
+
+    config = replace(CONFIG, packed=replace(CONFIG.packed, objects=("mug", "bowl", "pear")))
+    run_benchmark(config, tmp_path / "other", backend=FakeBackend(), progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        write_report(tmp_path / "other")
+    with open(tmp_path / "other" / TABLE2_CSV) as f:
+        assert all(r["source"].startswith("measured") for r in csv.DictReader(f))
+    with open(tmp_path / "other" / TABLE1_CSV) as f:  # isolated objects are the paper's
+        assert "HSQ (paper)" in {r["method"] for r in csv.DictReader(f)}
+    points = reported_points(load_run(tmp_path / "other").meta)
+    assert set(points["experiment"]) == {"isolated", "pile"}  # pile: GIGA's own objects
+    assert "real robot" in (tmp_path / "other" / "tables.md").read_text()
+    isolated_only = replace(config, isolated=replace(CONFIG.isolated, objects=("pear",)))
+    run_benchmark(isolated_only, tmp_path / "none", backend=FakeBackend(), progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        write_report(tmp_path / "none")
+    md = (tmp_path / "none" / "tables.md").read_text()
+    assert "real robot" not in md and "reported rows are left out" in md
 
 
 def test_plots_are_valid_pngs(run_dir: Path) -> None:

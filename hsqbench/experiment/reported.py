@@ -5,11 +5,16 @@ Hidden Superquadrics", Table I (isolated objects, 150 attempts) and Table II (pa
 15 rounds of 5 objects). All rows are real-robot results; the baselines' numbers are those the
 paper quotes from other work (other robots, objects and setups), so they are context, not a
 like-for-like comparison with our simulation.
+
+They describe the paper's 15 objects only, so a run on other objects (the unseen-object
+protocols) shows none of them: :func:`reported_rows` with the run's objects decides.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import cache
 
 CITATION = (
     "Wu, Liu, Liu, Chirikjian, Learning-Free Grasping of Unknown Objects Using Hidden "
@@ -39,5 +44,23 @@ REPORTED: tuple[ReportedRow, ...] = (
 )
 
 
-def reported_rows(experiment: str) -> tuple[ReportedRow, ...]:
+@cache
+def paper_objects() -> frozenset[str]:
+    """The objects of the paper's Tables I and II (the ``paper`` protocol's isolated list)."""
+    from hsqbench.experiment.config import load_experiment_config
+
+    return frozenset(load_experiment_config("paper").isolated.objects)
+
+
+def reported_rows(experiment: str, objects: Iterable[str] | None = None) -> tuple[ReportedRow, ...]:
+    """The paper's rows for ``experiment``; none when ``objects`` (a run's objects for that
+    experiment; None: not known, as in runs without a stored config) are not all the paper's."""
+    if objects is not None and not set(objects) <= paper_objects():
+        return ()
     return tuple(r for r in REPORTED if r.experiment == experiment)
+
+
+def run_objects(meta: dict, experiment: str) -> list[str] | None:
+    """The objects a run's stored config gives ``experiment`` (None when it holds no config)."""
+    config = meta.get("config")
+    return None if not config else list(config.get(experiment, {}).get("objects", []))

@@ -14,7 +14,7 @@ from hsqbench.experiment.paired_table import finished_rounds
 from hsqbench.experiment.pile_table import GIGA_PILE
 from hsqbench.experiment.plots.canvas import figure, n_text, row_order, span
 from hsqbench.experiment.plots.palette import REPORTED, planner_colours
-from hsqbench.experiment.reported import reported_rows
+from hsqbench.experiment.reported import reported_rows, run_objects
 from hsqbench.experiment.results import STATUS_OK
 from hsqbench.experiment.run_data import RunData
 from hsqbench.experiment.stats import Rate
@@ -62,11 +62,12 @@ def measured_rates(data: RunData) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=cols)
 
 
-def reported_points() -> pd.DataFrame:
-    """The papers' reported rates (no intervals): label, experiment, rate, percent."""
+def reported_points(meta: dict) -> pd.DataFrame:
+    """The papers' reported rates (no intervals) that describe the run of ``meta``: label,
+    experiment, rate, percent."""
     rows = []
     for exp in ("isolated", "packed"):
-        for r in reported_rows(exp):
+        for r in reported_rows(exp, run_objects(meta, exp)):
             rows.append(
                 {"label": r.method, "experiment": exp, "rate": "gsr", "percent": r.gsr_percent}
             )
@@ -93,7 +94,7 @@ def draw_headline(data: RunData, with_reported: bool = True) -> Any:
               if ((rates["experiment"] == e) & (rates["rate"] == r)).any()]  # fmt: skip
     planners = row_order(data.planners, rates["planner"])
     shown = {(e, r) for e, r, _ in panels}
-    rep = reported_points()
+    rep = reported_points(data.meta)
     keep = [(e, r) in shown for e, r in zip(rep["experiment"], rep["rate"], strict=True)]
     rep = rep[[with_reported and k for k in keep]]
     reported = list(dict.fromkeys(rep["label"]))
