@@ -19,7 +19,7 @@ help:
 	@echo "make test        run the test suite (fast checks, as CI does)"
 	@echo "make test-slow   run the slow checks too (every object of the library, long fits)"
 	@echo "make sweeps      robustness sweeps: depth noise, calibration, one camera, pad friction (runs/sweeps/)"
-	@echo "make results     regenerate the canonical runs behind the README into results/ (~7 h on 2 cores, resumable)"
+	@echo "make results     regenerate the canonical runs behind the README into results/ (~6 h on 2 cores, resumable)"
 	@echo "make bench       time the planner and the trial loop (bench/)"
 	@echo "make assets      build the whole object library (optional: benchmark builds what it needs)"
 	@echo "make learned     install the contact-graspnet planner (torch, torch-geometric, cgn-pytorch; wheels only)"
@@ -104,7 +104,7 @@ sweeps: $(STAMP)
 		$(if $(SWEEP_PLANNERS),--planners $(SWEEP_PLANNERS)) $(SWEEP_ARGS)
 
 # The canonical runs behind README.md and docs/ (the list: configs/canonical.yaml), into
-# results/, with every planner (the learned extra too) at this code version: about 7 hours with
+# results/, with every planner (the learned extra too) at this code version: about 6 hours with
 # JOBS=2 on a 2-core machine. Resumable: rerunning continues where it stopped. ONLY="paper3 ycb3"
 # makes some of them; RESULTS_ARGS="--dry-run" lists them with their expected time. Then the
 # README's headline tables are rewritten from them (hsqbench.experiment.front_page).
