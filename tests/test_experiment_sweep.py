@@ -311,11 +311,17 @@ def test_isolated_points_are_paired_with_the_default_point(tmp_path, sweep):
         assert sorted(by_key["low"]) == keys  # the same presentations at both points
         mine = np.array([by_key["low"][k] for k in keys])
         ref = np.array([by_key["default"][k] for k in keys])
-        assert low["vs_default_pp"] == pytest.approx(100 * (mine.mean() - ref.mean()), abs=0.01)
-        assert low["vs_default_ci_low_pp"] <= low["vs_default_pp"] <= low["vs_default_ci_high_pp"]
+        assert low["vs_default_difference_pp"] == pytest.approx(
+            100 * (mine.mean() - ref.mean()), abs=0.01
+        )
+        assert (
+            low["vs_default_ci_low_pp"]
+            <= low["vs_default_difference_pp"]
+            <= low["vs_default_ci_high_pp"]
+        )
     # Planner a succeeds with p 0.1 against 0.8 at the default: a clear loss.
     assert q.loc[("low", "a"), "vs_default_verdict"] == "worse"
-    assert q.loc[("low", "a"), "vs_default_p"] < 0.05
+    assert q.loc[("low", "a"), "vs_default_p_value"] < 0.05
     # sweep.md shows the same: the default marked, a's loss at "low" in bold with its p.
     md = (root / "sweep.md").read_text()
     assert "| default (default) |" in md

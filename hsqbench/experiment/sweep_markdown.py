@@ -17,13 +17,13 @@ def _cell(r: Any) -> str:
     rate = f"{r.gsr_percent:.1f} ({int(r.successes)}/{int(r.n)})" if r.n else "no attempts"
     if np.isfinite(r.cr_percent):
         rate += f", CR {r.cr_percent:.1f}"
-    if not np.isfinite(r.vs_default_pp):
+    if not np.isfinite(r.vs_default_difference_pp):
         return rate
-    diff = f"{signed_pp(r.vs_default_pp)} [{signed_pp(r.vs_default_ci_low_pp)}, "
+    diff = f"{signed_pp(r.vs_default_difference_pp)} [{signed_pp(r.vs_default_ci_low_pp)}, "
     diff += f"{signed_pp(r.vs_default_ci_high_pp)}]"
     if r.vs_default_verdict != SAME:
         diff = f"**{diff}**"
-    return f"{rate}; {diff}, p {p_text(r.vs_default_p)}"
+    return f"{rate}; {diff}, p {p_text(r.vs_default_p_value)}"
 
 
 def sweep_markdown(table: pd.DataFrame, meta: dict[str, Any]) -> str:

@@ -46,10 +46,11 @@ COLUMNS = (
     "cr_percent",
     "cr_ci_low_percent",
     "cr_ci_high_percent",
-    "vs_default_pp",
+    # PairedDifference.summary_columns, prefixed
+    "vs_default_difference_pp",
     "vs_default_ci_low_pp",
     "vs_default_ci_high_pp",
-    "vs_default_p",
+    "vs_default_p_value",
     "vs_default_verdict",
     "errors",
     "confidence",
@@ -121,13 +122,7 @@ def _vs_default(data: RunData, default: RunData, planner: str) -> dict[str, Any]
     if not len(keys):
         return {}
     d = PairedDifference.of(mine[keys].to_numpy(), ref[keys].to_numpy(), data.confidence)
-    return {
-        "vs_default_pp": 100 * d.difference,
-        "vs_default_ci_low_pp": 100 * d.low,
-        "vs_default_ci_high_pp": 100 * d.high,
-        "vs_default_p": d.p_value,
-        "vs_default_verdict": d.verdict,
-    }
+    return {f"vs_default_{name}": v for name, v in d.summary_columns().items()}
 
 
 def sweep_table(root: Path, meta: dict[str, Any]) -> pd.DataFrame:
