@@ -10,7 +10,8 @@ is missing: the tables would lack a row, so it stops first and says which extra 
 
 A finished run's ``attempts.csv`` is stored gzipped (``attempts.csv.gz``, byte-reproducible: no
 name or time in its header; in pieces ``attempts.csv.gz.00``, ... where it would pass 2 MiB):
-the committed runs stay a few MB, and every reader takes either form. The next ``make results`` unpacks it, resumes (nothing to do when complete) and packs again.
+the committed runs stay a few MB, and every reader takes either form. The next ``make results``
+unpacks it, resumes (nothing to do when complete) and packs again.
 
     python -m hsqbench.experiment.canonical [--out results] [--only paper3 ...] [--jobs N]
     python -m hsqbench.experiment.canonical --protocol quick --out /tmp/x   # the logic, fast
