@@ -163,6 +163,20 @@ def test_packed_rows_carry_the_clearance_rate(tmp_path, sweep):
     assert row["cr_percent"] == pytest.approx(100 * rate.value, rel=1e-3)
 
 
+def test_packed_points_are_paired_with_the_default_on_the_clearance_rate(tmp_path, sweep):
+    packed = replace(sweep, experiments=("packed",), parameters=sweep.parameters[1:])
+    run_sweep(packed, tmp_path / "sw", backend_factory=fake, progress=False)
+    q = pd.read_csv(tmp_path / "sw" / CSV_FILE).set_index(["value", "planner"])
+    assert np.isnan(q.loc[("default", "a"), "vs_default_difference_pp"])
+    for planner in ("a", "b"):  # every round pairs (same draws): the CR difference itself
+        low, default = q.loc[("low", planner)], q.loc[("default", planner)]
+        assert low["objects_presented"] == default["objects_presented"]
+        assert low["vs_default_difference_pp"] == pytest.approx(
+            low["cr_percent"] - default["cr_percent"], abs=0.01
+        )
+    assert q.loc[("low", "a"), "vs_default_verdict"] == "worse"
+
+
 def test_point_config_sizes_the_protocol_and_keeps_only_the_sweeps_experiments(sweep):
     config = point_config(sweep.protocols[0], sweep)
     assert config.isolated.attempts_per_object == 4 and config.isolated.enabled

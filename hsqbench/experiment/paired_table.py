@@ -17,6 +17,7 @@ import pandas as pd
 
 from hsqbench.experiment.cluster import MIN_CLUSTERS, cluster_interval
 from hsqbench.experiment.graspable import method_label
+from hsqbench.experiment.markdown import md_table
 from hsqbench.experiment.paired import BETTER, SAME, WORSE, PairedDifference
 from hsqbench.experiment.results import STATUS_OK
 from hsqbench.experiment.run_data import RunData
@@ -205,7 +206,7 @@ def render_paired(data: RunData, table: pd.DataFrame, per_object: pd.DataFrame,
         ]
         for _, r in table.iterrows()
     ]
-    out += _md(heads, rows)
+    out += [md_table(heads, rows), ""]
     if not per_object.empty:
         out += _per_object(per_object, reference)
     return out
@@ -229,9 +230,4 @@ def _per_object(per_object: pd.DataFrame, reference: str) -> list[str]:
                 f"{int(r['only_reference'])}, {r['p_value']:.2g})"
             )
         rows.append(cells)
-    return out + _md(["object", *(f"{p} − {reference}" for p in planners)], rows)
-
-
-def _md(headers: list[str], rows: list[list[str]]) -> list[str]:
-    lines = ["| " + " | ".join(headers) + " |", "|" + "|".join(" --- " for _ in headers) + "|"]
-    return [*lines, *("| " + " | ".join(r) + " |" for r in rows), ""]
+    return [*out, md_table(["object", *(f"{p} − {reference}" for p in planners)], rows), ""]

@@ -1,6 +1,6 @@
 """``sweep.md``: the sweep table as Markdown, one table per parameter and protocol; each cell the
-planner's rate at the point and, for isolated points, its paired difference to the default point
-(bold when McNemar's test calls it a difference)."""
+planner's rate at the point and its paired difference to the default point (bold when McNemar's
+test calls it a difference)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import pandas as pd
 
 from hsqbench.experiment.markdown import md_table, p_text, signed_pp
 from hsqbench.experiment.paired import SAME
+from hsqbench.experiment.sweep_table import default_point
 
 
 def _cell(r: Any) -> str:
@@ -31,16 +32,16 @@ def sweep_markdown(table: pd.DataFrame, meta: dict[str, Any]) -> str:
     lines = [
         "# Sweep results",
         "",
-        "Per point and planner: GSR % (successes/n; packed: and CR %) and, for isolated points, "
-        "the paired difference to the parameter's default point on the same presentations, "
-        "in percentage points with its 95 % interval (Newcombe) and the exact McNemar p; bold: "
-        "a difference at that level. Intervals of the rates are in sweep.csv.",
+        "Per point and planner: GSR % (successes/n; packed: and CR %) and the paired difference "
+        "to the parameter's default point on the same presentations (isolated: GSR; packed "
+        "and pile: CR), in percentage points with its 95 % interval (Newcombe) and the exact "
+        "McNemar p; bold: a difference at that level. Intervals of the rates are in sweep.csv.",
     ]
     for name, param in meta["parameters"].items():
         rows = table[table["parameter"] == name]
         if not len(rows):
             continue
-        default = next((p["label"] for p in param["points"] if not p["overrides"]), None)
+        default = (default_point(param) or {}).get("label")
         lines += ["", f"## {name}: {param.get('axis', name)}", "", f"![{name}]({name}.png)"]
         for (protocol, experiment), part in rows.groupby(["protocol", "experiment"], sort=False):
             planners = list(dict.fromkeys(part["planner"]))

@@ -6,24 +6,26 @@ Isolated: GSR (successful attempts / attempts). Packed: GSR over all attempts of
 CR (objects cleared / objects presented). Error rows (infrastructure failures) are counted in
 ``errors`` and left out of the rates, as in the report's tables.
 
-Every point runs the same presentations, so an isolated point is also paired with its
-parameter's default point (the one without overrides), presentation by presentation:
-``vs_default_*`` hold the GSR difference in percentage points with Newcombe's interval, the
-exact McNemar p and the verdict (:mod:`hsqbench.experiment.paired`); empty at the default itself,
-for packed rows and where a sweep has no default point.
+Every point runs the same presentations, so each point is also compared with its parameter's
+default point (the one without overrides) as ``hsqbench compare`` compares two runs
+(:mod:`hsqbench.experiment.run_compare`): isolated GSR over paired attempts, packed and pile CR
+over the objects of paired rounds. ``vs_default_*`` hold the difference in percentage points
+with Newcombe's interval, the exact McNemar p and the verdict; empty at the default itself and
+where a sweep has no default point.
 """
 
 from __future__ import annotations
 
 import json
+from functools import cache
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from hsqbench.experiment.paired import PairedDifference
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.rows import has_attempts
+from hsqbench.experiment.run_compare import matched_attempts, run_differences
 from hsqbench.experiment.run_data import RunData, load_run
 from hsqbench.experiment.stats import Rate
 
@@ -46,7 +48,7 @@ COLUMNS = (
     "cr_percent",
     "cr_ci_low_percent",
     "cr_ci_high_percent",
-    # PairedDifference.summary_columns, prefixed
+    # PairedDifference.summary_columns (through run_compare.run_differences), prefixed
     "vs_default_difference_pp",
     "vs_default_ci_low_pp",
     "vs_default_ci_high_pp",
@@ -108,47 +110,44 @@ def run_rows(data: RunData, experiments: list[str]) -> list[dict[str, Any]]:
     return rows
 
 
-def _isolated_successes(data: RunData, planner: str) -> pd.Series:
-    """``planner``'s isolated outcomes (True: success) by trial key, error rows left out."""
-    a = data.attempts
-    ok = a[(a["experiment"] == "isolated") & (a["planner"] == planner) & (a["status"] == STATUS_OK)]
-    return ok.set_index("trial_key")["success"].astype(bool)
+#: ``run_differences``' comparison -> the experiment of a sweep row.
+COMPARED = {"isolated GSR": "isolated", "packed CR": "packed", "pile CR": "pile"}
+PAIRED = ("difference_pp", "ci_low_pp", "ci_high_pp", "p_value", "verdict")
 
 
-def _vs_default(data: RunData, default: RunData, planner: str) -> dict[str, Any]:
-    """The ``vs_default_*`` columns of ``planner`` (isolated GSR, paired on trial keys)."""
-    mine, ref = _isolated_successes(data, planner), _isolated_successes(default, planner)
-    keys = mine.index.intersection(ref.index)
-    if not len(keys):
-        return {}
-    d = PairedDifference.of(mine[keys].to_numpy(), ref[keys].to_numpy(), data.confidence)
-    return {f"vs_default_{name}": v for name, v in d.summary_columns().items()}
+def default_point(param: dict[str, Any]) -> dict[str, Any] | None:
+    """The point of a recorded parameter that changes nothing (None: the sweep has none)."""
+    return next((p for p in param["points"] if not p["overrides"]), None)
+
+
+def _vs_default(data: RunData, default: RunData) -> dict[tuple[str, str], dict[str, Any]]:
+    """(experiment, planner) -> the ``vs_default_*`` columns: ``data`` (B) against ``default``
+    (A), paired trial by trial."""
+    diffs = run_differences(default, data, matched_attempts(default, data))
+    return {
+        (COMPARED[r["comparison"]], r["planner"]): {f"vs_default_{c}": r[c] for c in PAIRED}
+        for r in diffs.to_dict("records")
+    }
 
 
 def sweep_table(root: Path, meta: dict[str, Any]) -> pd.DataFrame:
     """Every recorded point whose run has results; points not run yet are left out."""
-    loaded: dict[str, RunData | None] = {}
 
-    def run(rel: str | None) -> RunData | None:
-        if rel is not None and rel not in loaded:
-            loaded[rel] = load_run(root / rel) if has_attempts(root / rel) else None
-        return loaded.get(rel) if rel is not None else None
+    @cache
+    def run(rel: str) -> RunData | None:
+        return load_run(root / rel) if has_attempts(root / rel) else None
 
     rows = []
     for name, param in meta["parameters"].items():
-        default = next((p["runs"] for p in param["points"] if not p["overrides"]), {})
+        default = default_point(param)
         for i, point in enumerate(param["points"]):
             for protocol, rel in point["runs"].items():
                 data = run(rel)
                 if data is None:
                     continue
-                ref = run(default.get(protocol))
+                ref = run(default["runs"][protocol]) if default and point is not default else None
+                paired = _vs_default(data, ref) if ref is not None else {}
                 for row in run_rows(data, param["experiments"]):
-                    paired = (
-                        _vs_default(data, ref, row["planner"])
-                        if ref is not None and ref is not data and row["experiment"] == "isolated"
-                        else {}
-                    )
                     rows.append(
                         {
                             "protocol": protocol,
@@ -159,7 +158,7 @@ def sweep_table(root: Path, meta: dict[str, Any]) -> pd.DataFrame:
                             "overrides": json.dumps(point["overrides"], sort_keys=True),
                             "run": rel,
                             **row,
-                            **paired,
+                            **paired.get((row["experiment"], row["planner"]), {}),
                         }
                     )
     return pd.DataFrame(rows, columns=list(COLUMNS))
