@@ -20,11 +20,17 @@ every attempt's outcome is identical.
 ``--jobs-compare``: the presentations run by ``--jobs 1`` and ``--jobs 2`` (the local
 executor's process pool) in turn: wall seconds per trial of each.
 
+``--set KEY=VALUE`` (repeatable) changes a trial-config value for this working tree's runs, as
+a sweep point does (``physics.timestep_s=0.004``, ``ik.restarts=4``): with ``--compare REF`` the
+reference keeps its own config, so the ratios price a candidate setting against ``REF``, and
+the outcome check shows which attempts it changed.
+
 Run with ``nice`` on a shared machine and report its load (``uptime``); the paper's objects
 and the unseen ones use their protocols' trial configs (``trial`` / ``trial_resting``).
 
     .venv/bin/python bench/bench_trial.py [--paper 3] [--unseen 3] [--packed 0]
-        [--poses 1] [--first-pose 0] [--planners hsq antipodal] [--compare REF | --jobs-compare]
+        [--poses 1] [--first-pose 0] [--planners hsq antipodal] [--set KEY=VALUE ...]
+        [--compare REF | --jobs-compare]
 """
 
 from __future__ import annotations
@@ -90,6 +96,28 @@ def _group(name: str, kind: str, cfg, specs: list) -> dict:
     return {"name": name, "kind": kind, "trial_config": cfg.trial_config, "specs": specs}
 
 
+def parse_overrides(items: list[str]) -> dict[str, object]:
+    """``["a.b=1", ...]`` -> ``{"a.b": 1}`` (values read as YAML); checked against the trial
+    config here, so a typo fails before any worker starts."""
+    import yaml
+
+    from hsqbench.config import load_tree
+    from hsqbench.sim.trial import TrialConfig
+
+    out: dict[str, object] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise SystemExit(f"--set {item!r}: write KEY=VALUE, e.g. physics.timestep_s=0.004")
+        out[key.strip()] = yaml.safe_load(value)
+    if out:
+        try:
+            load_tree(TrialConfig, "trial", out)
+        except (KeyError, TypeError, ValueError) as err:
+            raise SystemExit(f"--set: {err}") from None
+    return out
+
+
 def warmup_group(planner: str) -> dict:
     from hsqbench.experiment.seeds import derive_seed
 
@@ -105,7 +133,7 @@ class Runner:
         from hsqbench.experiment.executor import make_executor
 
         self.executor = make_executor("local", jobs)
-        self.backends: dict[str, object] = {}
+        self.backends: dict[tuple, object] = {}
         self.rows = tempfile.mkdtemp(prefix="bench-trial-rows-")
         self.runs = 0
 
@@ -113,9 +141,12 @@ class Runner:
         from hsqbench.experiment.backend import SimBackend
         from hsqbench.experiment.seeds import TrialSpec
 
-        backend = self.backends.setdefault(
-            request["trial_config"], SimBackend(request["trial_config"])
-        )
+        overrides = tuple(sorted(request.get("overrides", {}).items()))
+        key = (request["trial_config"], overrides)
+        if key not in self.backends:  # a reference version may predate overrides: none given
+            extra = {"overrides": overrides} if overrides else {}
+            self.backends[key] = SimBackend(request["trial_config"], **extra)
+        backend = self.backends[key]
         specs = [TrialSpec(e, p, b, i, tuple(o), s) for e, p, b, i, o, s in request["specs"]]
         # As a benchmark does before its trials: build (or load) the objects; not timed.
         backend.prepare(tuple(dict.fromkeys(o for s in specs for o in s.objects)), 1, False)
@@ -225,10 +256,23 @@ def main() -> int:
     mode.add_argument("--compare", metavar="REF", help="also run commit REF and print ratios")
     mode.add_argument("--jobs-compare", action="store_true", help="--jobs 1 against --jobs 2")
     mode.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a trial-config value for this tree's runs (not REF's), e.g. physics.timestep_s=0.004",
+    )
     args = parser.parse_args()
     if args.worker:
         return worker()
-    groups = build_groups(args)
+    overrides = parse_overrides(args.set)
+    if overrides and args.jobs_compare:
+        parser.error(
+            "--set prices a setting against --compare REF or in the breakdown, "
+            "not in --jobs-compare"
+        )
+    groups = [{**g, "overrides": overrides} if overrides else g for g in build_groups(args)]
     if not groups:
         parser.error("nothing to run: give --paper, --unseen or --packed a positive count")
     if args.jobs_compare:

@@ -115,7 +115,8 @@ def compare(
             w.run(warmup)
         for i, group in enumerate(groups):
             first, second = (ref, new) if i % 2 == 0 else (new, ref)
-            replies = {first.label: first.run(group), second.label: second.run(group)}
+            requests = version_requests(group)
+            replies = {w.label: w.run(requests[w.label]) for w in (first, second)}
             out.append((group, replies["reference"], replies["new"]))
             r, n = replies["reference"], replies["new"]
             same = "same" if outcomes(r) == outcomes(n) else "DIFFERENT"
@@ -130,6 +131,12 @@ def compare(
         ref.stop()
         new.stop()
     return out
+
+
+def version_requests(group: dict) -> dict[str, dict]:
+    """The request each version's worker gets for ``group``: ``--set`` overrides are the new
+    tree's candidate setting, so the reference runs without them, at its own config."""
+    return {"reference": {k: v for k, v in group.items() if k != "overrides"}, "new": group}
 
 
 def outcomes(reply: dict) -> dict[str, list]:
