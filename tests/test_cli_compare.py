@@ -118,6 +118,21 @@ def test_identical_runs_pass_fail_if_changed_and_changed_ones_list_their_attempt
     assert "success -> " in out and "changed attempts (first" in out
 
 
+def test_timings_are_not_changes(hsq_run, tmp_path, capsys) -> None:
+    """Every timing column of an attempt, the planner's stage times and the IK's included, may
+    differ between two runs of the same trials; none of them makes an attempt "changed"."""
+    b = tmp_path / "b"
+    shutil.copytree(hsq_run, b)
+    columns, rows = _read(b / "attempts.csv")
+    for r in rows:
+        for c in ("perception_s", "planning_s", "execution_s", "motion_planning_s", "trial_wall_s"):
+            r[c] = str(float(r[c] or 0.0) + 0.5)
+        r["planner_stages_s"] = '{"total": 9.0}'
+    _write(b / "attempts.csv", columns, rows)
+    assert main(["compare", str(hsq_run), str(b), "--fail-if-changed"]) == 0
+    assert "changed: 0" in capsys.readouterr().out
+
+
 def test_bad_input_is_one_line(hsq_run, tmp_path, capsys) -> None:
     assert main(["compare", str(tmp_path / "nope"), str(hsq_run)]) == 2
     assert "is not a folder" in capsys.readouterr().err

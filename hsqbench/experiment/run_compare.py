@@ -17,22 +17,12 @@ import pandas as pd
 from hsqbench.experiment.paired import WORSE, PairedDifference
 from hsqbench.experiment.paired_table import finished_rounds, object_pairs
 from hsqbench.experiment.results import STATUS_OK
-from hsqbench.experiment.rows import ATTEMPT_COLUMNS
+from hsqbench.experiment.rows import ATTEMPT_COLUMNS, VOLATILE_COLUMNS
 from hsqbench.experiment.run_data import RunData
 
-#: Columns that need not match for the same trial: timings, the worker, hashes, versions.
-UNFIXED = frozenset(
-    {
-        "perception_s",
-        "planning_s",
-        "execution_s",
-        "trial_wall_s",
-        "worker",
-        "config_hash",
-        "code_version",
-        "finished_at",
-    }
-)
+#: Columns that need not match for the same trial: the machine's and the moment's (timings,
+#: the worker, versions; rows.VOLATILE_COLUMNS) and the config hash (a run differs by config).
+UNFIXED = frozenset(VOLATILE_COLUMNS) | {"config_hash"}
 KEY = ("trial_key", "attempt_index")
 #: Columns that must match for the same trial (the seeds fix them): every other column.
 MATCH = tuple(c for c in ATTEMPT_COLUMNS if c not in UNFIXED | set(KEY))
