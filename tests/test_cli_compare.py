@@ -133,6 +133,28 @@ def test_timings_are_not_changes(hsq_run, tmp_path, capsys) -> None:
     assert "changed: 0" in capsys.readouterr().out
 
 
+def test_part_of_a_run_is_checked_against_those_trials_only(hsq_run, tmp_path, capsys) -> None:
+    """A smaller protocol on the same seeds (a few trials of a committed run, run again to
+    check today's code) passes --fail-if-changed with --part, and fails without it."""
+    part = tmp_path / "part"
+    shutil.copytree(hsq_run, part)
+    columns, rows = _read(part / "attempts.csv")
+    keys = sorted({r["trial_key"] for r in rows if r["experiment"] == "isolated"})[:40]
+    _write(part / "attempts.csv", columns, [r for r in rows if r["trial_key"] in keys])
+    round_columns, _ = _read(part / "rounds.csv")
+    _write(part / "rounds.csv", round_columns, [])
+    assert main(["compare", str(hsq_run), str(part), "--fail-if-changed"]) == 1
+    capsys.readouterr()
+    assert main(["compare", str(hsq_run), str(part), "--part", "--fail-if-changed"]) == 0
+    out = capsys.readouterr().out
+    assert "identical: 40; changed: 0" in out and "only in A: 0; only in B: 0" in out
+    _copy_flipping(part, tmp_path / "flipped", "hsq", 3, "success", "dropped")
+    assert (
+        main(["compare", str(hsq_run), str(tmp_path / "flipped"), "--part", "--fail-if-changed"])
+        == 1
+    )
+
+
 def test_bad_input_is_one_line(hsq_run, tmp_path, capsys) -> None:
     assert main(["compare", str(tmp_path / "nope"), str(hsq_run)]) == 2
     assert "is not a folder" in capsys.readouterr().err

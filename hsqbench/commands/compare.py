@@ -29,6 +29,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "(default: every column the seeds fix, not timings, workers, hashes or versions)",
     )
     parser.add_argument(
+        "--part",
+        action="store_true",
+        help="B ran part of A's trials (a smaller protocol on the same seeds, e.g. a few objects "
+        "to check that this code still gives a committed run): A's other trials are left out",
+    )
+    parser.add_argument(
         "--show", type=int, default=50, metavar="N", help="changed attempts listed (default 50)"
     )
     parser.add_argument(
@@ -139,6 +145,12 @@ def run(args: argparse.Namespace) -> int:
         for data in (a, b):
             data.attempts = data.attempts[data.attempts["planner"].isin(args.planners)]
             data.rounds = data.rounds[data.rounds["planner"].isin(args.planners)]
+    if args.part:
+        ran = set(b.attempts["trial_key"]) | set(b.rounds["trial_key"])
+        if not ran:
+            raise ValueError(f"--part: {args.run_b} has no trials")
+        a.attempts = a.attempts[a.attempts["trial_key"].isin(ran)]
+        a.rounds = a.rounds[a.rounds["trial_key"].isin(ran)]
     merged = matched_attempts(a, b)
     diffs = changed_attempts(merged, columns)
     differences = run_differences(a, b, merged)
