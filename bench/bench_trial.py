@@ -97,24 +97,22 @@ def _group(name: str, kind: str, cfg, specs: list) -> dict:
 
 
 def parse_overrides(items: list[str]) -> dict[str, object]:
-    """``["a.b=1", ...]`` -> ``{"a.b": 1}`` (values read as YAML); checked against the trial
-    config here, so a typo fails before any worker starts."""
-    import yaml
-
+    """``--set`` items as trial-config overrides, checked against the trial config here, so a
+    typo fails before any worker starts."""
     from hsqbench.config import load_tree
+    from hsqbench.errors import ConfigError
+    from hsqbench.overrides import parse_assignments
     from hsqbench.sim.trial import TrialConfig
 
-    out: dict[str, object] = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            raise SystemExit(f"--set {item!r}: write KEY=VALUE, e.g. physics.timestep_s=0.004")
-        out[key.strip()] = yaml.safe_load(value)
-    if out:
-        try:
+    try:
+        out = parse_assignments(items)
+    except ConfigError as err:
+        raise SystemExit(str(err)) from None
+    try:
+        if out:
             load_tree(TrialConfig, "trial", out)
-        except (KeyError, TypeError, ValueError) as err:
-            raise SystemExit(f"--set: {err}") from None
+    except (TypeError, ValueError) as err:  # ConfigError is a ValueError
+        raise SystemExit(f"--set: {err}") from None
     return out
 
 

@@ -133,3 +133,23 @@ def apply_overrides(
             raise ConfigError(f"override {full!r}: a path is keys joined by '.', e.g. a.b.0")
         _set(out, cls, keys, value, full)
     return out
+
+
+def parse_assignments(items: list[str], option: str = "--set") -> dict[str, Any]:
+    """Command-line ``KEY=VALUE`` items as overrides, each value read as YAML
+    (``ik.restarts=4`` -> ``{"ik.restarts": 4}``).
+
+    Raises:
+        ConfigError: an item without ``=`` or with an empty key, naming the form to write.
+    """
+    import yaml
+
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(
+                f"{option} {item!r}: write KEY=VALUE, e.g. execution.release_height_m=0.01"
+            )
+        out[key.strip()] = yaml.safe_load(value)
+    return out

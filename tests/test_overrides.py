@@ -6,7 +6,7 @@ import pytest
 
 from hsqbench.config import load_config_data
 from hsqbench.errors import ConfigError
-from hsqbench.overrides import apply_overrides
+from hsqbench.overrides import apply_overrides, parse_assignments
 from hsqbench.sim.perception_config import PerceptionConfig
 from hsqbench.sim.physics import PhysicsConfig
 from hsqbench.sim.robot import RobotConfig
@@ -102,3 +102,13 @@ def test_object_mass_scale_scales_mass_and_inertia_of_the_objects_only():
     assert total2 - total1 == pytest.approx(1.5 * m1)  # nothing else got heavier
     with pytest.raises(ConfigError, match="object_mass_scale must be positive"):
         tree({"physics.object_mass_scale": 0.0})
+
+
+def test_command_line_assignments_are_read_as_yaml():
+    assert parse_assignments(["ik.restarts=4", "scene.depth_cameras.names=[cam_left]"]) == {
+        "ik.restarts": 4,
+        "scene.depth_cameras.names": ["cam_left"],
+    }
+    for bad in ("ik.restarts", "=4"):
+        with pytest.raises(ConfigError, match=r"--set .*write KEY=VALUE"):
+            parse_assignments([bad])

@@ -110,19 +110,14 @@ def _add_filters(parser: argparse.ArgumentParser) -> None:
 
 
 def _overrides(items: list[str]) -> dict[str, object]:
-    import yaml
-
     from hsqbench.cli import CommandError
+    from hsqbench.errors import ConfigError
+    from hsqbench.overrides import parse_assignments
 
-    out: dict[str, object] = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            raise CommandError(
-                f"--set {item!r}: write KEY=VALUE, e.g. execution.release_height_m=0.01"
-            )
-        out[key.strip()] = yaml.safe_load(value)
-    return out
+    try:
+        return parse_assignments(items)
+    except ConfigError as err:
+        raise CommandError(str(err)) from None
 
 
 def _chosen_keys(args: argparse.Namespace, rows: list[dict[str, str]]) -> list[str]:
