@@ -135,8 +135,8 @@ def apply_overrides(
     return out
 
 
-def parse_assignments(items: list[str], option: str = "--set") -> dict[str, Any]:
-    """Command-line ``KEY=VALUE`` items as overrides, each value read as YAML
+def parse_assignments(items: list[str]) -> dict[str, Any]:
+    """``--set KEY=VALUE`` items of a command line as overrides, each value read as YAML
     (``ik.restarts=4`` -> ``{"ik.restarts": 4}``).
 
     Raises:
@@ -149,7 +149,7 @@ def parse_assignments(items: list[str], option: str = "--set") -> dict[str, Any]
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
             raise ConfigError(
-                f"{option} {item!r}: write KEY=VALUE, e.g. execution.release_height_m=0.01"
+                f"--set {item!r}: write KEY=VALUE, e.g. execution.release_height_m=0.01"
             )
         out[key.strip()] = yaml.safe_load(value)
     return out
