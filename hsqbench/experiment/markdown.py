@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 
 from hsqbench.experiment.graspable import PRIVILEGED_NOTE, has_graspability
-from hsqbench.experiment.reported import CITATION, PROVENANCE, reported_rows, run_objects
+from hsqbench.experiment.reported import CITATION, PROVENANCE, reported_rows
 from hsqbench.experiment.results import STATUS_ERROR
 from hsqbench.experiment.run_data import MEASURED, RunData
 from hsqbench.sim.outcome import Outcome
@@ -241,7 +241,7 @@ def _notes(data: RunData, graspability: bool) -> list[str]:
         (
             f'- "{PROVENANCE}": {CITATION}; the baselines\' numbers come from other robots and '
             "setups, quoted by the paper. They are context, not a like-for-like comparison."
-            if any(reported_rows(e, run_objects(data.meta, e)) for e in ("isolated", "packed"))
+            if any(reported_rows(e, data.meta) for e in ("isolated", "packed"))
             else "- The paper's reported rows are left out: they describe its 15 objects, and "
             "this run's objects are others."
         ),

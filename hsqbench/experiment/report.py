@@ -40,7 +40,7 @@ from hsqbench.experiment.plots import (  # noqa: F401 (the plot names are the re
     TIMES_PLOT,
     write_plots,
 )
-from hsqbench.experiment.reported import PROVENANCE, reported_rows, run_objects
+from hsqbench.experiment.reported import PROVENANCE, reported_rows
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.run_data import RunData, load_run
 from hsqbench.experiment.stats import Rate, summarize_times
@@ -103,7 +103,7 @@ def _gsr(df: pd.DataFrame, confidence: float) -> Rate | None:
 def table1(data: RunData) -> pd.DataFrame:
     """Isolated GSR per planner: reported rows, then measured rows with Wilson intervals."""
     rows: list[dict[str, Any]] = []
-    for r in reported_rows("isolated", run_objects(data.meta, "isolated")):
+    for r in reported_rows("isolated", data.meta):
         rows.append({"method": r.method, "source": PROVENANCE, "gsr_percent": r.gsr_percent})
     for p in data.planners:
         ok = _ok(data.attempts, "isolated", p)
@@ -162,7 +162,7 @@ def table1_per_object(data: RunData) -> pd.DataFrame:
 def table2(data: RunData) -> pd.DataFrame:
     """Packed GSR and CR per planner: reported rows, then measured rows with intervals."""
     rows: list[dict[str, Any]] = []
-    for r in reported_rows("packed", run_objects(data.meta, "packed")):
+    for r in reported_rows("packed", data.meta):
         rows.append(
             {
                 "method": r.method,

@@ -7,12 +7,11 @@ paper quotes from other work (other robots, objects and setups), so they are con
 like-for-like comparison with our simulation.
 
 They describe the paper's 15 objects only, so a run on other objects (the unseen-object
-protocols) shows none of them: :func:`reported_rows` with the run's objects decides.
+protocols) shows none of them: :func:`reported_rows` reads them from the run's ``run.json``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cache
 
@@ -52,15 +51,17 @@ def paper_objects() -> frozenset[str]:
     return frozenset(load_experiment_config("paper").isolated.objects)
 
 
-def reported_rows(experiment: str, objects: Iterable[str] | None = None) -> tuple[ReportedRow, ...]:
-    """The paper's rows for ``experiment``; none when ``objects`` (a run's objects for that
-    experiment; None: not known, as in runs without a stored config) are not all the paper's."""
+def reported_rows(experiment: str, meta: dict | None = None) -> tuple[ReportedRow, ...]:
+    """The paper's rows for ``experiment``; none when the run of ``meta`` (its ``run.json``)
+    gave that experiment objects that are not all the paper's. Without a stored config (or
+    without ``meta``) the objects are not known and every row is returned."""
+    objects = _run_objects(meta or {}, experiment)
     if objects is not None and not set(objects) <= paper_objects():
         return ()
     return tuple(r for r in REPORTED if r.experiment == experiment)
 
 
-def run_objects(meta: dict, experiment: str) -> list[str] | None:
+def _run_objects(meta: dict, experiment: str) -> list[str] | None:
     """The objects a run's stored config gives ``experiment`` (None when it holds no config)."""
     config = meta.get("config")
     return None if not config else list(config.get(experiment, {}).get("objects", []))

@@ -14,7 +14,7 @@ from hsqbench.experiment.paired_table import finished_rounds
 from hsqbench.experiment.pile_table import GIGA_PILE
 from hsqbench.experiment.plots.canvas import figure, n_text, row_order, span
 from hsqbench.experiment.plots.palette import REPORTED, planner_colours
-from hsqbench.experiment.reported import reported_rows, run_objects
+from hsqbench.experiment.reported import reported_rows
 from hsqbench.experiment.results import STATUS_OK
 from hsqbench.experiment.run_data import RunData
 from hsqbench.experiment.stats import Rate
@@ -67,7 +67,7 @@ def reported_points(meta: dict) -> pd.DataFrame:
     experiment, rate, percent."""
     rows = []
     for exp in ("isolated", "packed"):
-        for r in reported_rows(exp, run_objects(meta, exp)):
+        for r in reported_rows(exp, meta):
             rows.append(
                 {"label": r.method, "experiment": exp, "rate": "gsr", "percent": r.gsr_percent}
             )
