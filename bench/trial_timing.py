@@ -8,6 +8,11 @@ wrapped call running at that moment (its exclusive time), under ``(step, part)``
 step but in no part is the step's ``rest``, time in no step (the trial's own bookkeeping, the
 executor, results rows) is ``other``. CPU time is the process's (``time.process_time``: every
 thread, so the software GL renderer's threads count too).
+
+Physics stepped by the trial's stepper is split by the phase it ran in (pregrasp, approach,
+close, lift, carry, release, home): a step costs several times more with an object in the hand
+(the no-slip pass on the finger contacts) than with the arm moving in free air, so the phase
+says what a setting would buy.
 """
 
 from __future__ import annotations
@@ -19,9 +24,26 @@ from collections import defaultdict
 from collections.abc import Callable
 from typing import Any
 
+#: The part of physics stepped outside any stepper phase (scene settling, rest checks).
+PHYSICS = "physics (mj_step)"
+
+
+def _phase_physics(args: tuple[Any, ...], outer: str) -> str:
+    """``Stepper.step``'s part: physics, named by the stepper's phase."""
+    return f"{PHYSICS}: {args[0].phase or 'no phase'}"
+
+
+def _physics(args: tuple[Any, ...], outer: str) -> str:
+    """``mj_step``'s part: the phase's when a stepper called it, else plain physics."""
+    return outer if outer.startswith(PHYSICS) else PHYSICS
+
+
+#: A part: a name, or a function of the call's positional arguments and the enclosing part.
+Part = str | Callable[[tuple[Any, ...], str], str] | None
+
 #: (module, attribute path, step or None, part or None): a step opens a step; a part names the
 #: time inside one. Attributes are patched where the caller looks them up.
-WRAPPED: tuple[tuple[str, str, str | None, str | None], ...] = (
+WRAPPED: tuple[tuple[str, str, str | None, Part], ...] = (
     ("hsqbench.sim.trial.env", "TrialEnv.build", "scene build", "assets, layout, compose"),
     ("hsqbench.sim.scene.build", "compile_settled", None, "compile"),
     ("hsqbench.sim.scene.settled", "come_to_rest", None, "settle"),
@@ -42,7 +64,8 @@ WRAPPED: tuple[tuple[str, str, str | None, str | None], ...] = (
     ("hsqbench.sim.ik", "ArmIK.sweep_clearance", None, "arm-table/bin sweep check"),
     ("hsqbench.sim.ik", "ArmIK.points_hit", None, "arm-cloud check"),
     ("hsqbench.experiment.results", "ResultStore.append", "results rows", None),
-    ("mujoco", "mj_step", None, "physics (mj_step)"),
+    ("hsqbench.sim.motion", "Stepper.step", None, _phase_physics),
+    ("mujoco", "mj_step", None, _physics),
 )
 
 
@@ -67,12 +90,13 @@ class Attribution:
         acc[1] += now[1] - self._mark[1]
         self._mark = now
 
-    def _wrap(self, fn: Callable[..., Any], step: str | None, part: str | None) -> Callable:
+    def _wrap(self, fn: Callable[..., Any], step: str | None, part: Part) -> Callable:
         @functools.wraps(fn)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             self._charge()
-            outer = self._stack[-1][0] if self._stack else "other"
-            self._stack.append((step or outer, part or "rest"))
+            outer_step, outer_part = self._stack[-1] if self._stack else ("other", "")
+            name = part(args, outer_part) if callable(part) else part
+            self._stack.append((step or outer_step, name or "rest"))
             try:
                 return fn(*args, **kwargs)
             finally:
@@ -81,11 +105,13 @@ class Attribution:
 
         return wrapper
 
-    def install(self) -> list[str]:
-        """Wrap every function of :data:`WRAPPED` that this code version has; returns the
-        ones it lacks."""
+    def install(
+        self, wrapped: tuple[tuple[str, str, str | None, Part], ...] = WRAPPED
+    ) -> list[str]:
+        """Wrap every function of ``wrapped`` that this code version has; returns the ones it
+        lacks."""
         missing = []
-        for module_name, path, step, part in WRAPPED:
+        for module_name, path, step, part in wrapped:
             try:
                 owner: Any = importlib.import_module(module_name)
                 *parents, attr = path.split(".")
