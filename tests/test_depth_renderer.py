@@ -1,5 +1,6 @@
 """One GL context per process (hsqbench.sim.depth_renderer): the same images as mujoco.Renderer,
-bit for bit, and the same clouds from a fresh and a reused context."""
+bit for bit, and the same clouds from a fresh and a reused context; an MjrContext kept for the
+next model that differs only in poses, and drawn with, gives that model's images too."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from hsqbench.sim.depth_renderer import DepthRenderer, gl_context
+from hsqbench.sim import depth_renderer
+from hsqbench.sim.depth_renderer import DepthRenderer, gl_context, same_uploads
 from hsqbench.sim.perception import Perception, load_perception_config
 
 
@@ -114,3 +116,52 @@ def test_closed_renderer_and_bad_input_are_clear_errors(scene):
     off = model.vis.global_.offwidth
     with pytest.raises(ValueError, match="offscreen buffer"):
         DepthRenderer(model, cam.height_px, off + 1)
+
+
+def test_a_model_differing_only_in_poses_draws_with_the_kept_context(scene):
+    from hsqbench.sim.scene import build_scene
+
+    model, data, info = scene
+    moved, moved_data, _ = build_scene("isolated", "proc_mug", seed=3)
+    assert not np.array_equal(model.body_pos, moved.body_pos)  # the mug stands elsewhere
+    assert same_uploads(model, moved)
+    option = _option()
+    cam = info.depth_cameras[0]
+    h, w = cam.height_px, cam.width_px
+    with DepthRenderer(model, h, w) as first:
+        first.depth(data, model.camera(cam.name).id, option)
+        kept = first._mjr
+    with DepthRenderer(moved, h, w) as second:
+        assert second._mjr is kept  # nothing uploaded again
+        cam_id = moved.camera(cam.name).id
+        depth = second.depth(moved_data, cam_id, option)
+        seg = second.segmentation(moved_data, cam_id, option)
+    assert np.array_equal(depth, _reference(moved, moved_data, cam_id, option, h, w))
+    assert np.array_equal(seg, _reference(moved, moved_data, cam_id, option, h, w, True))
+
+
+def test_other_meshes_get_their_own_context_and_a_busy_kept_one_is_left_alone(scene):
+    from hsqbench.sim.scene import build_scene
+
+    model, data, info = scene
+    box, box_data, _ = build_scene("isolated", "proc_box", seed=5)
+    assert not same_uploads(model, box)
+    option = _option()
+    cam = info.depth_cameras[0]
+    h, w = cam.height_px, cam.width_px
+    cam_id = box.camera(cam.name).id
+    with DepthRenderer(model, h, w) as mug:
+        # the kept context is in use: the box gets a context of its own, freed at its close
+        with DepthRenderer(box, h, w) as own:
+            assert own._mjr is not mug._mjr
+            assert depth_renderer._kept.mjr is mug._mjr
+            depth = own.depth(box_data, cam_id, option)
+        mug_depth = mug.depth(data, model.camera(cam.name).id, option)
+    assert np.array_equal(depth, _reference(box, box_data, cam_id, option, h, w))
+    assert np.array_equal(
+        mug_depth, _reference(model, data, model.camera(cam.name).id, option, h, w)
+    )
+    # no renderer draws with the mug's context now: the box's replaces it as the kept one
+    with DepthRenderer(box, h, w) as replaced:
+        assert depth_renderer._kept.mjr is replaced._mjr
+        assert np.array_equal(replaced.depth(box_data, cam_id, option), depth)
