@@ -1,5 +1,6 @@
 """Trial throughput: isolated trials per second in one process (``--jobs 1``), and what making
-a trial's depth renderer costs, with a GL context of its own and with the process's one.
+a trial's depth renderer costs: with a GL context of its own, with the process's one, and with
+the uploads kept from the same object in another pose.
 
 A fixed set (objects x seeds, the paper's planner) runs after one warm-up trial (imports, the IK
 seed library, the first GL context), so the number is the steady rate a worker reaches; a sweep
@@ -24,27 +25,38 @@ import numpy as np  # noqa: E402
 OBJECTS = ["tomato_soup_can", "foam_brick", "mustard_bottle", "sugar_box"]
 
 
-def renderer_cost(objects: list[str], repeats: int) -> tuple[float, float]:
+def renderer_cost(objects: list[str], repeats: int) -> tuple[float, float, float]:
     """Median seconds to make and free the renderer of one built scene (one image size, as the
     two cameras share it): a fresh ``mujoco.Renderer`` (its own GL context: the code before
-    issue 17) and a :class:`DepthRenderer` (the process's GL context), alternating."""
+    issue 17), a :class:`DepthRenderer` after one of another object (the process's GL context,
+    the meshes uploaded), and one after the same object in another pose (the uploads kept).
+    The objects take turns, so the second needs two or more of them."""
     import mujoco
 
     from hsqbench.sim.depth_renderer import DepthRenderer
     from hsqbench.sim.scene import build_scene
 
-    fresh, reused = [], []
+    scenes = []
     for obj in objects:
         model, _, info = build_scene("isolated", obj, seed=0)
+        moved, _, _ = build_scene("isolated", obj, seed=1)
         cam = info.depth_cameras[0]
-        for _ in range(repeats):
+        scenes.append((model, moved, cam.height_px, cam.width_px))
+    fresh, uploaded, kept = [], [], []
+    for _ in range(repeats):
+        for model, moved, h, w in scenes:
             t0 = time.perf_counter()
-            mujoco.Renderer(model, cam.height_px, cam.width_px).close()
+            mujoco.Renderer(model, h, w).close()
             t1 = time.perf_counter()
-            DepthRenderer(model, cam.height_px, cam.width_px).close()
+            DepthRenderer(model, h, w).close()
+            t2 = time.perf_counter()
+            DepthRenderer(moved, h, w).close()
             fresh.append(t1 - t0)
-            reused.append(time.perf_counter() - t1)
-    return float(np.median(fresh)), float(np.median(reused))
+            uploaded.append(t2 - t1)
+            kept.append(time.perf_counter() - t2)
+    if len(scenes) < 2:  # the same object each turn: nothing was uploaded after the first
+        uploaded = uploaded[:1]
+    return float(np.median(fresh)), float(np.median(uploaded)), float(np.median(kept))
 
 
 def main() -> None:
@@ -73,10 +85,11 @@ def main() -> None:
         f"  throughput: {n / total:.3f} trials/s ({total:.1f} s; median {np.median(walls):.2f} s)"
     )
     print(f"  outcomes: {sorted(outcomes)}")
-    fresh, reused = renderer_cost(args.objects, 4)
+    fresh, uploaded, kept = renderer_cost(args.objects, 4)
     print(
         f"  making a trial's renderer: {1000 * fresh:.0f} ms with its own GL context "
-        f"(mujoco.Renderer), {1000 * reused:.0f} ms with the process's (DepthRenderer)"
+        f"(mujoco.Renderer), {1000 * uploaded:.0f} ms with the process's (DepthRenderer), "
+        f"{1000 * kept:.0f} ms after the same object in another pose (uploads kept)"
     )
 
 
