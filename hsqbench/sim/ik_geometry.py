@@ -15,6 +15,7 @@ import mink
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 
 from hsqbench.sim.ik_types import IKConfig, Pose
 from hsqbench.sim.robot import Panda
@@ -157,10 +158,13 @@ class ArmGeometry:
         m, d, g = self.model, self.data, self.robot_geoms
         centre, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:] + margin_m
         # A point in a box lies within the box's half-diagonal of its centre: a geom whose
-        # sphere misses the cloud's bounding box holds no point (most of them, most of the way).
+        # sphere misses the cloud's bounding box holds no point (most of them, most of the way),
+        # and only the points in the sphere of a geom that reaches the cloud are tested (a
+        # KD-tree query: the hand near a packed scene's cloud meets a few hundred of its points).
         reach = np.linalg.norm(half, axis=1) + 1e-9
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         every = min_points < 1  # then a sample with no point in any box is a hit too
+        tree = cKDTree(pts)
         for k, q in enumerate(np.asarray(qs, dtype=float)):
             self.configuration.update(self._full_q(q))
             rot = d.geom_xmat[g].reshape(-1, 3, 3)
@@ -171,10 +175,18 @@ class ArmGeometry:
             )
             if not len(near):
                 continue
-            # Points in each near geom's frame, relative to its box centre: (G, M, 3).
-            local = np.einsum("gji,gmj->gmi", rot[near], pts[None] - d.geom_xpos[g[near]][:, None])
-            inside = np.all(np.abs(local - centre[near, None]) <= half[near, None], axis=2)
-            counts = inside.sum(axis=1)
+            in_sphere = tree.query_ball_point(box[near], reach[near])
+            sizes = np.fromiter(map(len, in_sphere), dtype=np.intp, count=len(near))
+            counts = np.zeros(len(near), dtype=np.intp)
+            if sizes.any():
+                idx = np.concatenate(in_sphere).astype(np.intp)
+                which = np.repeat(near, sizes)  # the geom of each (point, geom) pair
+                # Each point in its geom's frame, relative to the box centre.
+                local = np.einsum("nji,nj->ni", rot[which], pts[idx] - d.geom_xpos[g[which]])
+                inside = np.all(np.abs(local - centre[which]) <= half[which], axis=1)
+                counts = np.bincount(
+                    np.repeat(np.arange(len(near)), sizes), weights=inside, minlength=len(near)
+                ).astype(np.intp)
             if counts.max() >= min_points:
                 j = int(np.argmax(counts))  # the first of the most, as over all geoms
                 return k, int(g[near[j]]), int(counts[j])
