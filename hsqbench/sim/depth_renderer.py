@@ -12,7 +12,7 @@ The ``MjrContext`` is kept too, for the next model with the same uploads: presen
 object in other poses compile to models that differ only in where the bodies and the keyframe
 are (:data:`POSE_FIELDS`), which the context never reads (each draw takes the poses from the
 data). Uploading a scene's meshes (the Panda's and the object's, about 400 000 vertices) costs
-0.13 s, and a worker runs the presentations of one object in a row.
+0.13-0.16 s, and a worker runs the presentations of one object in a row.
 
 Depth: the offscreen buffer holds reversed-Z window depth (``mjDEPTH_ZEROFAR``); planar metric
 depth is ``d / (z + c)`` with the perspective projection's ``c = (f + n) / (2 (f - n)) - 1/2``
@@ -158,7 +158,6 @@ def gl_context() -> Any:
         atexit.register(_free_context)
     _context.make_current()
     return _context
-
 
 
 class DepthRenderer:
