@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
+from hsqbench.experiment.heap import keep_freed_memory
 from hsqbench.experiment.seeds import TrialSpec
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
 
@@ -242,6 +243,7 @@ class SimBackend:
 
     def _trial_config(self) -> Any:
         if self._config is None:
+            keep_freed_memory()  # the process runs trials from now on (hsqbench.experiment.heap)
             trial = self._module()
             load = getattr(trial, "load_trial_config", None)
             if load is None:  # a minimal trial module: its TrialConfig from the file as is
