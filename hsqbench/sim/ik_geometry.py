@@ -180,13 +180,12 @@ class ArmGeometry:
             counts = np.zeros(len(near), dtype=np.intp)
             if sizes.any():
                 idx = np.concatenate(in_sphere).astype(np.intp)
-                which = np.repeat(near, sizes)  # the geom of each (point, geom) pair
+                slot = np.repeat(np.arange(len(near)), sizes)  # the near geom of each pair
+                which = near[slot]
                 # Each point in its geom's frame, relative to the box centre.
                 local = np.einsum("nji,nj->ni", rot[which], pts[idx] - d.geom_xpos[g[which]])
                 inside = np.all(np.abs(local - centre[which]) <= half[which], axis=1)
-                counts = np.bincount(
-                    np.repeat(np.arange(len(near)), sizes), weights=inside, minlength=len(near)
-                ).astype(np.intp)
+                counts = np.bincount(slot[inside], minlength=len(near))
             if counts.max() >= min_points:
                 j = int(np.argmax(counts))  # the first of the most, as over all geoms
                 return k, int(g[near[j]]), int(counts[j])
