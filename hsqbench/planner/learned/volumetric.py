@@ -25,6 +25,8 @@ Nothing is random: the same observation gives the same grasps whatever the seed.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -120,6 +122,49 @@ def grasp_frames(quats: Array) -> Array:
     return np.stack([closing, np.cross(approach, closing), approach], axis=-1)
 
 
+def view_yaw(camera: Array, centre: Array) -> Array:
+    """(3, 3) rotation about the vertical of a frame in which the camera at ``camera`` lies on
+    the -y side of ``centre`` (x, y), as the training camera lay on the cube's (azimuth -90 deg).
+    Points map as ``p_frame = p_world @ R``."""
+    d = np.asarray(camera, dtype=np.float64)[:2] - np.asarray(centre, dtype=np.float64)[:2]
+    if not np.hypot(*d) > 1e-9:
+        return np.eye(3)  # straight above: any yaw sees the same
+    psi = np.arctan2(d[1], d[0]) + 0.5 * np.pi
+    c, s = np.cos(psi), np.sin(psi)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def input_frames(
+    views: Sequence[Any], points: Array, kind: str
+) -> list[tuple[Array, tuple[Any, ...]]]:
+    """``[(yaw rotation, views)]``: the inputs the network runs on. ``fused``: the world axes and
+    every view; ``per_view``: each view alone, in the frame that puts its camera on the -y side
+    of the cloud's footprint centre (:func:`view_yaw`)."""
+    if kind == "fused":
+        return [(np.eye(3), tuple(views))]
+    centre = 0.5 * (points[:, :2].min(axis=0) + points[:, :2].max(axis=0))
+    return [(view_yaw(np.asarray(v.T_world_camera)[:3, 3], centre), (v,)) for v in views]
+
+
+@dataclass(frozen=True)
+class YawedView:
+    """A depth image with its camera pose in a yawed frame (what :func:`tsdf.integrate` reads)."""
+
+    depth_m: NDArray
+    K: Array
+    T_world_camera: Array
+
+
+def yawed_view(view: Any, yaw: Array) -> Any:
+    """``view`` with its camera pose expressed in the frame rotated by ``yaw`` (the view itself
+    when ``yaw`` is the identity, so the fused input is bit for bit today's)."""
+    if np.array_equal(yaw, np.eye(3)):
+        return view
+    T = np.array(view.T_world_camera, dtype=np.float64)
+    T[:3] = yaw.T @ T[:3]
+    return YawedView(depth_m=view.depth_m, K=np.asarray(view.K, dtype=np.float64), T_world_camera=T)
+
+
 class VolumetricPlanner(PlannerBase):
     """VGN (``network="vgn"``) or GIGA (``"giga"``) behind the planner protocol.
 
@@ -179,11 +224,17 @@ class VolumetricPlanner(PlannerBase):
             )
         timings: dict[str, float] = {}
         tick = time.perf_counter()
-        origins, centres = cube_origins(clean.points, plane, cfg)
         shape = (grid.voxels,) * 3
         trunc = grid.truncation_voxels * grid.voxel_m
-        grids = [tsdf.integrate(views, o, grid.voxel_m, shape, trunc) for o in origins]
-        inputs = np.stack([g.network_input() for g in grids])
+        cubes = []  # (yaw rotation, origins, centres, grids) per input
+        for yaw, seen in input_frames(views, clean.points, cfg.input):
+            local = clean.points @ yaw  # the cloud in the yawed frame (p' = R^T p)
+            local_plane = np.concatenate([plane[:3] @ yaw, plane[3:]])
+            origins, centres = cube_origins(local, local_plane, cfg)
+            local_views = [yawed_view(v, yaw) for v in seen]
+            grids = [tsdf.integrate(local_views, o, grid.voxel_m, shape, trunc) for o in origins]
+            cubes.append((yaw, origins, centres, grids))
+        inputs = np.stack([g.network_input() for *_, grids in cubes for g in grids])
         valid = np.stack([detection.valid_centres(x, cfg.detection) for x in inputs])
         timings["tsdf"] = time.perf_counter() - tick
 
@@ -193,7 +244,16 @@ class VolumetricPlanner(PlannerBase):
         timings["network"] = time.perf_counter() - tick
 
         tick = time.perf_counter()
-        grasps = self._detect(origins, centres, valid, quality, rotation, width)
+        grasps, first = [], 0
+        for yaw, origins, centres, _ in cubes:
+            at = slice(first, first + len(origins))
+            grasps += self._detect(
+                yaw, origins, centres, valid[at], quality[at], rotation[at], width[at]
+            )
+            first += len(origins)
+        # Merge ``best``: every view's grasps ranked by their own quality (ties: view order).
+        order = np.argsort([-g.score for g in grasps], kind="stable")
+        grasps = [grasps[i] for i in order]
         timings["detection"] = time.perf_counter() - tick
         n_valid = int(valid.sum())
         reason = ""
@@ -201,12 +261,14 @@ class VolumetricPlanner(PlannerBase):
             reason = (
                 f"no local maximum of {self.name}'s quality reached "
                 f"{cfg.detection.low_quality:g} at the {n_valid} voxels near seen surfaces of "
-                f"{len(origins)} cube(s)"
+                f"{len(inputs)} cube(s)"
             )
-        surface = np.concatenate([g.surface_points() for g in grids])
+        surface = np.concatenate(
+            [g.surface_points() @ yaw.T for yaw, *_, grids in cubes for g in grids]
+        )
         return PlanResult(
             grasps=grasps,
-            remaining={"cubes": len(origins), "valid_voxels": n_valid, "grasps": len(grasps)},
+            remaining={"cubes": len(inputs), "valid_voxels": n_valid, "grasps": len(grasps)},
             timings=timings,
             reason=reason,
             surface_points=surface,
@@ -225,6 +287,7 @@ class VolumetricPlanner(PlannerBase):
 
     def _detect(
         self,
+        yaw: Array,
         origins: Array,
         centres: Array,
         valid: NDArray,
@@ -232,8 +295,9 @@ class VolumetricPlanner(PlannerBase):
         rotation: NDArray,
         width: NDArray,
     ) -> list[Grasp]:
-        """Each cube's detections as harness grasps, those another cube owns dropped, best
-        first (ties: cube order, then each cube's own order)."""
+        """One input's cubes' detections as world grasps, those another of its cubes owns
+        dropped, best first (ties: cube order, then each cube's own order). ``yaw``: the
+        rotation of the input's frame in the world (the cubes' positions are in that frame)."""
         vox = self.config.grid.voxel_m
         found = []
         for t in range(len(origins)):  # a handful of cubes, each vectorised
@@ -250,6 +314,8 @@ class VolumetricPlanner(PlannerBase):
         )
         order = np.argsort(-scores, kind="stable")
         frames = grasp_frames(quats[order]) if len(order) else np.zeros((0, 3, 3))
+        frames = yaw @ frames  # to the world
+        position = position @ yaw.T
         shift = self.config.pads_beyond_tcp_m
         return [
             Grasp(

@@ -104,6 +104,12 @@ class VolumetricConfig:
         grid: the cube (:class:`GridConfig`).
         detection: the detection (:class:`DetectionConfig`).
         weights: which training set's weights each scene kind uses (``packed`` or ``pile``).
+        input: ``per_view``: for each depth image, cubes yawed about the vertical so that its
+            camera lies on their -y side, the TSDF integrated from that image alone (as the
+            published weights were trained); ``fused``: cubes aligned with the world axes, the
+            TSDF fused from every image.
+        merge: how the views' grasps become one list with ``per_view``: ``best``, all of them
+            ranked by their own quality.
         max_cubes_per_axis: at most this many cubes along x and along y.
         pads_beyond_tcp_m: the harness's ``P_G`` (midpoint of the pads) lies this far beyond the
             networks' grasp position (their hand's TCP) along the approach.
@@ -118,6 +124,8 @@ class VolumetricConfig:
     weights: dict[str, str] = field(
         default_factory=lambda: {"isolated": "packed", "packed": "packed", "pile": "pile"}
     )
+    input: Literal["fused", "per_view"] = "fused"
+    merge: Literal["best"] = "best"
     max_cubes_per_axis: int = 3
     pads_beyond_tcp_m: float = 0.041
     weights_url: str = (
@@ -142,6 +150,10 @@ class VolumetricConfig:
             )
         if self.max_cubes_per_axis < 1 or self.torch_threads < 0:
             raise ValueError("volumetric: max_cubes_per_axis >= 1 and torch_threads >= 0")
+        if self.input not in ("fused", "per_view"):
+            raise ValueError(f"volumetric.input must be fused or per_view, got {self.input!r}")
+        if self.merge != "best":
+            raise ValueError(f"volumetric.merge must be best, got {self.merge!r}")
         if self.device not in ("auto", "cpu", "cuda"):
             raise ValueError(f"volumetric.device must be auto, cpu or cuda, got {self.device!r}")
 
