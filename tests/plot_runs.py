@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-import pandas as pd
-
 from hsqbench.experiment.run_data import RunData
+from hsqbench.experiment.schema import ATTEMPTS, ROUNDS, format_row, typed_frame
 
 OBJECTS = ("mug", "bowl")
 
@@ -21,11 +20,13 @@ def attempts(experiment: str, planner: str, outcomes: list[str], graspable: list
             "status": "ok",
             "outcome": o,
             "success": int(o == "success"),
-            "graspable": str(g),
+            "graspable": g,
             "objects": OBJECTS[i % len(OBJECTS)],
             "base_seed": 0,
             "trial_index": i,
+            "seed": i,
             "attempt_index": 0,
+            "n_attempts": 1,
             "planning_s": 0.1 + 0.01 * i,
         }
         for i, (o, g) in enumerate(zip(outcomes, graspable, strict=True))
@@ -42,6 +43,8 @@ def rounds(kind: str, planner: str, cleared: list[int], per_round: int = 5) -> l
             "status": "ok",
             "base_seed": 0,
             "trial_index": i,
+            "seed": i,
+            "n_attempts": c,
             "objects": ";".join(names),
             "objects_cleared": ";".join(names[:c]),
             "objects_graspable": ";".join(names[:4]),
@@ -72,10 +75,11 @@ def synthetic_run(planners=("hsq", "antipodal", "oracle"), pile: bool = False) -
         if pile:
             rows += attempts("pile", p, pile_outcomes, [1] * 6)
             rnd += rounds("pile", p, [4, 4])
-    frame = pd.DataFrame(rows)
-    frame["success"] = frame["success"].astype(int)
+    # Typed as load_run types a run's files (hsqbench.experiment.schema).
+    frame = typed_frame([format_row(ATTEMPTS, r) for r in rows], "attempts")
+    rounds_frame = typed_frame([format_row(ROUNDS, r) for r in rnd], "rounds")
     meta = {"run": "synthetic", "config": {"planners": list(planners), "confidence": 0.95}}
-    return RunData(frame, pd.DataFrame(rnd), meta, list(planners), list(OBJECTS), 0.95)
+    return RunData(frame, rounds_frame, meta, list(planners), list(OBJECTS), 0.95)
 
 
 def overlapping_texts(fig: Any) -> list[tuple[str, str]]:

@@ -20,11 +20,11 @@ PRIVILEGED_NOTE = "privileged: reads the true meshes (a ceiling, not a method)"
 
 def has_graspability(attempts: pd.DataFrame) -> bool:
     """Whether the run checked graspability (older runs and runs with the check off did not)."""
-    return len(attempts) > 0 and bool((attempts["graspable"].isin(["0", "1"])).any())
+    return len(attempts) > 0 and bool(attempts["graspable"].notna().any())
 
 
 def graspable_only(attempts: pd.DataFrame) -> pd.DataFrame:
-    return attempts[attempts["graspable"] == "1"]
+    return attempts[attempts["graspable"] == 1]
 
 
 def gsr_graspable(attempts: pd.DataFrame, confidence: float) -> Rate | None:

@@ -150,7 +150,7 @@ def table1_per_object(data: RunData) -> pd.DataFrame:
                     "attempts": cells["trials"],
                     "graspable_successes": g["successes"],
                     "graspable_attempts": g["trials"],
-                    "checked": int(mine["graspable"].isin(["0", "1"]).sum()),
+                    "checked": int(mine["graspable"].notna().sum()),
                     "gsr_percent": 100 * cells["rate"],
                     "ci_low_percent": 100 * cells["low"],
                     "ci_high_percent": 100 * cells["high"],

@@ -1,11 +1,10 @@
-"""The rows of a run's CSV files: their columns, and the rows of one finished trial
+"""The rows of a run's CSV files (columns: :mod:`hsqbench.experiment.schema`): the rows of one finished trial
 (:func:`rows_for`), every field on one line (:mod:`hsqbench.experiment.results` writes them)."""
 
 from __future__ import annotations
 
 import gzip
 import json
-import math
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -13,6 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from hsqbench.experiment import schema
 from hsqbench.experiment.backend import TrialRun
 from hsqbench.experiment.config import ROUND_EXPERIMENTS
 from hsqbench.sim.outcome import Attempt, RoundResult
@@ -81,79 +81,11 @@ def has_attempts(run_dir: Path) -> bool:
     return plain.exists() or bool(packed_files(packed))
 
 
-FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")
-
-ATTEMPT_COLUMNS = (
-    "trial_key",
-    "experiment",
-    "planner",
-    "base_seed",
-    "trial_index",
-    "seed",
-    "objects",
-    "attempt_index",
-    "n_attempts",
-    "status",
-    "outcome",
-    "success",
-    "graspable",
-    "target",
-    "object_pose",
-    "resting_pose",
-    "rank_executed",
-    "n_grasps",
-    "score",
-    *FACTOR_NAMES,
-    "factors",
-    "width_m",
-    "grasp_pose",
-    "grasp_flipped",
-    "grasp_pose_object",
-    "top_scores",
-    "perception_s",
-    "planning_s",
-    "execution_s",
-    "motion_planning_s",
-    "sim_time_s",
-    "planner_stages_s",
-    "ranks_tried",
-    "detail",
-    "scene_settle_s",
-    "scene_max_speed",
-    "trial_wall_s",
-    "worker",
-    "config_hash",
-    "code_version",
-    "finished_at",
-)
-
-ROUND_COLUMNS = (
-    "trial_key",
-    "planner",
-    "base_seed",
-    "trial_index",
-    "seed",
-    "objects",
-    "n_objects",
-    "objects_cleared",
-    "n_cleared",
-    "clearance_rate",
-    "objects_lost",
-    "n_lost",
-    "objects_graspable",
-    "n_graspable",
-    "n_attempts",
-    "n_success",
-    "status",
-    "detail",
-    "scene_settle_s",
-    "scene_max_speed",
-    "trial_wall_s",
-    "worker",
-    "config_hash",
-    "code_version",
-    "finished_at",
-)
+# The columns, their kinds and meanings: hsqbench.experiment.schema (the writer formats each
+# field by its column's kind; readers type the columns from it).
+ATTEMPT_COLUMNS = schema.ATTEMPT_COLUMNS
+ROUND_COLUMNS = schema.ROUND_COLUMNS
+FACTOR_NAMES = schema.FACTOR_NAMES
 
 # Columns that depend on the machine or the moment, not on the trial: ignore them to compare runs.
 VOLATILE_COLUMNS = (
@@ -170,20 +102,6 @@ VOLATILE_COLUMNS = (
 
 STATUS_OK = "ok"
 STATUS_ERROR = "error"
-
-
-def _fmt(value: Any) -> str:
-    """One CSV field on one line: floats round-trip exactly, NaN is empty."""
-    if value is None:
-        return ""
-    if isinstance(value, bool):
-        return "1" if value else "0"
-    if isinstance(value, float):
-        return "" if math.isnan(value) else repr(value)
-    if isinstance(value, int):
-        return str(value)
-    text = str(value)
-    return text.replace("\r", " ").replace("\n", " | ") if ("\n" in text or "\r" in text) else text
 
 
 def _numbers(values: Any) -> str:
@@ -296,9 +214,7 @@ def rows_for(
         "scene_settle_s": getattr(run.result, "scene_settle_s", None),
         "scene_max_speed": getattr(run.result, "scene_max_speed", None),
     }
-    attempt_rows = [
-        {c: _fmt(r.get(c)) for c in ATTEMPT_COLUMNS} for r in _attempt_records(run, common)
-    ]
+    attempt_rows = [schema.format_row(schema.ATTEMPTS, r) for r in _attempt_records(run, common)]
     if spec.experiment not in ROUND_EXPERIMENTS:
         return attempt_rows, None
     result = run.result
@@ -330,4 +246,4 @@ def rows_for(
             "status": STATUS_ERROR,
             "detail": "; ".join(filter(None, (run.error or "unknown error", spec.draw_note))),
         }
-    return attempt_rows, {c: _fmt(round_row.get(c)) for c in ROUND_COLUMNS}
+    return attempt_rows, schema.format_row(schema.ROUNDS, round_row)

@@ -12,13 +12,14 @@ from typing import Any
 import pandas as pd
 
 from hsqbench.experiment.results import (
-    ATTEMPT_COLUMNS,
-    ROUND_COLUMNS,
+    ATTEMPTS_FILE,
+    ROUNDS_FILE,
     RUN_FILE,
     STATUS_OK,
     load_results,
 )
 from hsqbench.experiment.rows import has_attempts
+from hsqbench.experiment.schema import typed_frame
 from hsqbench.experiment.settling import unsettled_note
 
 MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoCo backend
@@ -26,7 +27,8 @@ MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoC
 
 @dataclass
 class RunData:
-    """A run's complete trials as typed frames, and its metadata."""
+    """A run's complete trials as typed frames (dtypes: :mod:`hsqbench.experiment.schema`),
+    and its metadata."""
 
     attempts: pd.DataFrame
     rounds: pd.DataFrame
@@ -42,10 +44,6 @@ class RunData:
     def source(self, planner: str) -> str:
         """The provenance label of ``planner``'s rows: this run's, or the run it was joined from."""
         return self.joined.get(planner, self.measured)
-
-
-_NUMERIC = ("success", "attempt_index", "n_attempts", "base_seed", "planning_s", "trial_wall_s")
-_ROUND_NUMERIC = ("n_objects", "n_cleared", "n_lost", "n_attempts", "n_success", "base_seed")
 
 
 def load_run(run_dir: str | Path) -> RunData:
@@ -70,14 +68,9 @@ def load_run(run_dir: str | Path) -> RunData:
     meta: dict[str, Any] = {}
     if (run_dir / RUN_FILE).exists():
         meta = json.loads((run_dir / RUN_FILE).read_text())
-    attempts = pd.DataFrame(results.attempts, columns=list(ATTEMPT_COLUMNS), dtype=str)
-    rounds = pd.DataFrame(results.rounds, columns=list(ROUND_COLUMNS), dtype=str)
-    for col in _NUMERIC:
-        if col in attempts:
-            attempts[col] = pd.to_numeric(attempts[col], errors="coerce")
-    for col in _ROUND_NUMERIC:
-        if col in rounds:
-            rounds[col] = pd.to_numeric(rounds[col], errors="coerce")
+    # Typed by the schema: the same dtypes under every pandas the package allows.
+    attempts = typed_frame(results.attempts, "attempts", str(run_dir / ATTEMPTS_FILE))
+    rounds = typed_frame(results.rounds, "rounds", str(run_dir / ROUNDS_FILE))
     config = meta.get("config", {})
     seen_planners = list(dict.fromkeys(attempts["planner"])) if len(attempts) else []
     planners = [p for p in config.get("planners", []) if p in seen_planners]
