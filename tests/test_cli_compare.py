@@ -166,3 +166,63 @@ def test_bad_input_is_one_line(hsq_run, tmp_path, capsys) -> None:
 def test_a_run_against_itself_passes(hsq_run, flag, capsys) -> None:
     assert main(["compare", str(hsq_run), str(hsq_run), flag]) == 0
     assert "changed: 0" in capsys.readouterr().out
+
+
+def test_runs_of_other_protocols_are_refused_in_one_line(hsq_run, tmp_path, capsys) -> None:
+    """Another protocol's run.json (results/paper3's: other trial config, objects, draws):
+    nothing in it pairs with ycb3's trials, so compare refuses instead of passing."""
+    other = tmp_path / "paper3like"
+    shutil.copytree(hsq_run, other)
+    shutil.copy(CANON.parent / "paper3" / "run.json", other / "run.json")
+    assert main(["compare", str(hsq_run), str(other), "--fail-if-worse"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "differs from" in err[0] and "same protocol" in err[0]
+
+
+def test_runs_with_nothing_in_common_are_refused(hsq_run, tmp_path, capsys) -> None:
+    renamed = tmp_path / "renamed"
+    shutil.copytree(hsq_run, renamed)
+    for name in ("attempts.csv", "rounds.csv"):
+        columns, rows = _read(renamed / name)
+        for r in rows:
+            r["planner"] = "antipodal"
+            r["trial_key"] = r["trial_key"].replace("/hsq/", "/antipodal/")
+        _write(renamed / name, columns, rows)
+    assert main(["compare", str(hsq_run), str(renamed), "--fail-if-worse"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no attempt or round pairs up" in err[0]
+
+
+def test_part_with_seeds_the_full_run_lacks_is_refused(hsq_run, tmp_path, capsys) -> None:
+    import json
+
+    part = tmp_path / "part"
+    shutil.copytree(hsq_run, part)
+    meta = json.loads((part / "run.json").read_text())
+    meta["config"]["seeds"] = [7]
+    (part / "run.json").write_text(json.dumps(meta))
+    assert main(["compare", str(hsq_run), str(part), "--part"]) == 2
+    assert "base seeds [7] are not among" in capsys.readouterr().err
+
+
+def test_fail_if_worse_judges_by_holm_adjusted_p(hsq_run, tmp_path, capsys) -> None:
+    """Packed CR is tested over rounds: a few objects lost in a few rounds is not a regression."""
+    b = tmp_path / "b"
+    shutil.copytree(hsq_run, b)
+    columns, rows = _read(b / "rounds.csv")
+    changed = 0
+    for r in rows:
+        if changed < 3 and r["trial_key"].startswith("packed/") and r["objects_cleared"]:
+            kept = r["objects_cleared"].split(";")[1:]
+            r["objects_cleared"], r["n_cleared"] = ";".join(kept), str(len(kept))
+            changed += 1
+    _write(b / "rounds.csv", columns, rows)
+    assert main(["compare", str(hsq_run), str(b), "--fail-if-worse"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "packed CR" in x and "hsq" in x)
+    assert "45 rounds" in line and line.rstrip().endswith("not distinguishable")
+
+
+@pytest.mark.slow
+def test_the_canonical_paper3_and_ycb3_are_not_compared(capsys) -> None:
+    assert main(["compare", str(CANON.parent / "paper3"), str(CANON), "--fail-if-worse"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1

@@ -15,8 +15,8 @@ PLANNERS = ["hsq", "antipodal", "oracle"]
 
 def _paired() -> pd.DataFrame:
     table = paired_table(synthetic_run(), "hsq")
-    # A cluster interval as a run with enough objects has (two objects are too few for one).
-    table.loc[0, ["cluster_ci_low_pp", "cluster_ci_high_pp"]] = (-80.0, -5.0)
+    # An interval over objects as a run with enough objects has (two are too few for one).
+    table.loc[0, ["ci_low_pp", "ci_high_pp"]] = (-80.0, -5.0)
     return table
 
 
@@ -32,24 +32,33 @@ def test_a_panel_per_comparison_a_row_per_planner_the_reference_at_zero():
     table = _paired()
     fig = draw_forest(table, PLANNERS, 0.95)
     axes = fig.axes[0::2]  # plots, each with its column of numbers beside it
-    assert [ax.get_title().split(":")[0] for ax in axes] == ["isolated GSR", "packed CR"]
-    assert axes[0].get_title() == "isolated GSR: planner − hsq, 10 paired presentations"
+    assert [ax.get_title().split(":")[0] for ax in axes] == [
+        "isolated GSR",
+        "packed CR",
+        "packed GSR",
+    ]
+    assert axes[0].get_title() == "isolated GSR: planner − hsq, over 2 objects"
     for ax in axes:
         assert [t.get_text() for t in ax.get_yticklabels()] == ["antipodal", "oracle (privileged)"]
         lo, hi = ax.get_xlim()
         assert lo < 0 < hi
         assert any(tuple(line.get_xdata()) == (0, 0) for line in ax.get_lines())
     row = table.iloc[0]  # antipodal, isolated GSR
-    low, high, y = _interval(axes[0], "antipodal (paired)")
-    (marker,) = [c for c in axes[0].containers if c.get_label() == "antipodal (paired)"]
+    low, high, y = _interval(axes[0], "antipodal (clusters)")
+    (marker,) = [c for c in axes[0].containers if c.get_label() == "antipodal (clusters)"]
     assert marker.lines[0].get_xdata()[0] == pytest.approx(row["difference_pp"])
-    assert (low, high) == pytest.approx((row["ci_low_pp"], row["ci_high_pp"]))
-    c_low, c_high, c_y = _interval(axes[0], "antipodal (cluster)")
-    assert (c_low, c_high) == (-80.0, -5.0) and c_y > y  # drawn just below the paired one
+    assert (low, high) == (-80.0, -5.0)
+    p_low, p_high, p_y = _interval(axes[0], "antipodal (presentations)")
+    assert (p_low, p_high) == pytest.approx(
+        (row["presentations_ci_low_pp"], row["presentations_ci_high_pp"])
+    )
+    assert p_y > y  # drawn just below the one over objects
     assert axes[0].get_xlim()[0] < -80.0  # every bound in view
     assert axes[0].containers[0].lines[0].get_color() == FIXED["antipodal"]
-    # Two rounds are too few for a cluster interval: only the paired ones are drawn.
-    assert [c.get_label() for c in axes[1].containers] == ["antipodal (paired)", "oracle (paired)"]
+    # Two rounds are too few for a bootstrap and CR has no test over objects: points only.
+    markers = [c for c in axes[1].containers]
+    assert [c.get_label() for c in markers] == ["antipodal (clusters)", "oracle (clusters)"]
+    assert all(not c.has_xerr for c in markers)
 
 
 def test_the_right_margin_gives_numbers_and_the_verdict():
@@ -68,9 +77,9 @@ def test_the_right_margin_gives_numbers_and_the_verdict():
 
 def test_tiny_p_values_read_as_a_bound():
     row = _paired().iloc[0].copy()
-    row["p_value"] = 3e-12
+    row["p_holm"] = 3e-12
     assert "p<0.001" in right_label(row)
-    row["p_value"] = 0.0421
+    row["p_holm"] = 0.0421
     assert "p=0.042" in right_label(row)
 
 

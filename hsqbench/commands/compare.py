@@ -2,8 +2,10 @@
 
 Judges a change to a planner, a config or the simulation in one command: per planner, the
 paired difference B - A (isolated GSR over the same poses, packed and pile CR over the same
-draws) with its interval and exact McNemar test, the outcome transitions, the objects whose
-attempts changed, and every attempt whose recorded columns differ.
+draws' rounds) with its interval and test, Holm-adjusted over all of them, the outcome
+transitions, the objects whose attempts changed, and every attempt whose recorded columns
+differ. Runs of different protocols, seeds or draws are refused (exit 2), as is a pair of runs
+with nothing in common.
 """
 
 from __future__ import annotations
@@ -40,8 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--fail-if-worse",
         action="store_true",
-        help="exit 1 when B is significantly worse than A for some planner (McNemar p below "
-        "1 - the run's confidence): for CI",
+        help="exit 1 when B is significantly worse than A for some planner (Holm-adjusted p "
+        "below 1 - the run's confidence): for CI",
     )
     parser.add_argument(
         "--fail-if-changed",
@@ -64,21 +66,21 @@ def _describe(name: str, path: Path, data: Any) -> str:
 
 def _print_differences(differences: Any, confidence: float) -> None:
     conf = f"{100 * confidence:g} %"
-    print(f"\npaired difference B - A (Newcombe {conf} CI, exact McNemar on the changed pairs):")
-    if differences.empty:
-        print("  no paired attempts or rounds")
-        return
+    print(
+        f"\npaired difference B - A ({conf} CI; isolated: Newcombe and exact McNemar over the "
+        "presentations; CR: bootstrap and exact sign-flip over rounds; p Holm over these tests):"
+    )
     print(
         f"  {'comparison':<13} {'planner':<22} {'A %':>6} {'B %':>6} {'B - A [CI] (pp)':>24} "
-        f"{'s->f':>5} {'f->s':>5} {'pairs':>6} {'p':>8}  B against A"
+        f"{'s->f':>5} {'f->s':>5} {'pairs':>6} {'over':>14} {'p':>8} {'p Holm':>8}  B against A"
     )
     for _, r in differences.iterrows():
         diff = f"{r['difference_pp']:+.1f} [{r['ci_low_pp']:+.1f}, {r['ci_high_pp']:+.1f}]"
         print(
             f"  {r['comparison']:<13} {r['planner']:<22} {r['a_percent']:6.1f} "
             f"{r['b_percent']:6.1f} {diff:>24} {int(r['success_to_failure']):5d} "
-            f"{int(r['failure_to_success']):5d} {int(r['pairs']):6d} {r['p_value']:8.3g}  "
-            f"{r['verdict']}"
+            f"{int(r['failure_to_success']):5d} {int(r['pairs']):6d} {r['over']:>14} "
+            f"{r['p_value']:8.3g} {r['p_holm']:8.3g}  {r['verdict']}"
         )
 
 
@@ -123,6 +125,7 @@ def _value(v: Any) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hsqbench.experiment.combine import RunMismatch, check_part_of, check_same_trials
     from hsqbench.experiment.report import load_run
     from hsqbench.experiment.run_compare import (
         MATCH,
@@ -145,18 +148,27 @@ def run(args: argparse.Namespace) -> int:
         for data in (a, b):
             data.attempts = data.attempts[data.attempts["planner"].isin(args.planners)]
             data.rounds = data.rounds[data.rounds["planner"].isin(args.planners)]
+    whose = f"{args.run_a}'s"
     if args.part:
+        check_part_of(a, b, args.run_b, whose)
         ran = set(b.attempts["trial_key"]) | set(b.rounds["trial_key"])
         if not ran:
             raise ValueError(f"--part: {args.run_b} has no trials")
         a.attempts = a.attempts[a.attempts["trial_key"].isin(ran)]
         a.rounds = a.rounds[a.rounds["trial_key"].isin(ran)]
+    else:
+        check_same_trials(a, b, args.run_b, whose)
     merged = matched_attempts(a, b)
     diffs = changed_attempts(merged, columns)
     differences = run_differences(a, b, merged)
     only_a = int((merged["_merge"] == "left_only").sum())
     only_b = int((merged["_merge"] == "right_only").sum())
     matched = len(merged) - only_a - only_b
+    if matched == 0 or differences.empty:
+        raise RunMismatch(
+            f"{args.run_a} and {args.run_b}: no attempt or round pairs up (trial key, planner "
+            "and draw); compare runs of the same protocol that share planners"
+        )
     print(_describe("A", args.run_a, a))
     print(_describe("B", args.run_b, b))
     print(

@@ -43,19 +43,67 @@ def _same(a: Any, b: Any) -> bool:
     return a == b
 
 
+def check_same_trials(main: RunData, other: RunData, other_dir: Path, whose: str) -> None:
+    """Raise unless ``other`` ran ``main``'s protocol: the same seeds, objects, attempts,
+    rounds, trial config and draws (``whose``: how the message names ``main``).
+
+    Raises:
+        RunMismatch: names the first setting that differs.
+    """
+    mine, theirs = _protocol(main.meta), _protocol(other.meta)
+    for key in (*_SAME, "packed_draws", "pile_draws"):
+        if not _same(mine[key], theirs[key]):
+            raise RunMismatch(
+                f"{other_dir}: its '{key}' differs from {whose}, so its trials present "
+                "other poses; run the same protocol (same config and seeds)"
+            )
+
+
+def check_part_of(main: RunData, part: RunData, part_dir: Path, whose: str) -> None:
+    """Raise unless ``part`` ran part of ``main``'s trials: the same trial config, base seeds
+    among ``main``'s, and each of its rounds on ``main``'s draw for that round.
+
+    Raises:
+        RunMismatch: names what differs.
+    """
+    mine, theirs = _protocol(main.meta), _protocol(part.meta)
+    if not _same(mine["trial_config"], theirs["trial_config"]):
+        raise RunMismatch(
+            f"{part_dir}: its 'trial_config' differs from {whose}, so its trials present other "
+            "poses; run a protocol that extends the same one"
+        )
+    extra = sorted(set(theirs["seeds"] or []) - set(mine["seeds"] or []))
+    if extra:
+        raise RunMismatch(
+            f"{part_dir}: base seeds {extra} are not among {whose} ({mine['seeds']}); --part "
+            "needs a subset of its trials"
+        )
+    keys = part.rounds["trial_key"].astype(str) if len(part.rounds) else pd.Series(dtype=str)
+    for kind in ("packed", "pile"):
+        draws = f"{kind}_draws"
+        a, b = mine[draws] or {}, theirs[draws] or {}
+        ran = set(keys[keys.str.startswith(f"{kind}/")].map(_round_id))
+        other = sorted(k for k in set(a) & set(b) & ran if not _same(a[k], b[k]))
+        if other:
+            raise RunMismatch(
+                f"{part_dir}: round {other[0]} drew other objects than {whose} ({draws}); "
+                "--part needs the same draws (the same object list for packed and pile rounds)"
+            )
+
+
+def _round_id(trial_key: str) -> str:
+    """``packed/hsq/s0/round/001`` -> ``s0/round/001``, the key of ``packed_draws``."""
+    parts = str(trial_key).split("/")
+    return "/".join(parts[2:])
+
+
 def combine(main: RunData, other: RunData, other_dir: Path) -> None:
     """Add ``other``'s planners (those ``main`` lacks) to ``main`` in place, with a note.
 
     Raises:
         RunMismatch: the runs' protocols differ (names the first setting that does).
     """
-    mine, theirs = _protocol(main.meta), _protocol(other.meta)
-    for key in (*_SAME, "packed_draws", "pile_draws"):
-        if not _same(mine[key], theirs[key]):
-            raise RunMismatch(
-                f"{other_dir}: its '{key}' differs from the main run's, so its trials present "
-                "other poses; run the same protocol (same config and seeds)"
-            )
+    check_same_trials(main, other, other_dir, "the main run's")
     new = [p for p in other.planners if p not in main.planners]
     if not new:
         return

@@ -42,6 +42,16 @@ from hsqbench.experiment.stats import wilson_interval
 BETTER, WORSE, SAME = "better", "worse", "not distinguishable"
 
 
+def verdict_of(difference: float, p_value: float, confidence: float) -> str:
+    """ "better" or "worse" (by the sign of ``difference``) when ``p_value`` < 1 - confidence,
+    else "not distinguishable"; "—" without a test (NaN p)."""
+    if not np.isfinite(p_value):
+        return "—"
+    if p_value >= 1.0 - confidence or difference == 0:
+        return SAME
+    return BETTER if difference > 0 else WORSE
+
+
 def mcnemar_exact(only_planner: int, only_reference: int) -> float:
     """Two-sided exact McNemar p-value of the discordant counts (1.0 without discordant pairs)."""
     if only_planner < 0 or only_reference < 0:
@@ -120,10 +130,9 @@ class PairedDifference:
 
     @property
     def verdict(self) -> str:
-        """ "better", "worse" or "not distinguishable" at the run's confidence level."""
-        if self.p_value >= 1.0 - self.confidence or self.only_planner == self.only_reference:
-            return SAME
-        return BETTER if self.only_planner > self.only_reference else WORSE
+        """ "better", "worse" or "not distinguishable" at the run's confidence level (of the
+        unadjusted p; a table of several tests judges by its Holm-adjusted p instead)."""
+        return verdict_of(self.difference, self.p_value, self.confidence)
 
     def summary_columns(self) -> dict[str, float | str]:
         """The difference, its interval (percentage points), p and verdict, as CSV columns."""

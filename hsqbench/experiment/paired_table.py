@@ -1,11 +1,14 @@
 """The paired section of a report: each planner against a reference planner (hsq by default) on
 the presentations both ran (statistics in :mod:`hsqbench.experiment.paired`).
 
-- Isolated GSR: pairs are presentations (base seed, object, pose index); the interval over
-  objects resamples objects (:mod:`hsqbench.experiment.cluster`).
+- Isolated GSR: pairs are presentations (base seed, object, pose index); the primary interval
+  and test are over objects (:mod:`hsqbench.experiment.over_clusters`), beside Newcombe's
+  interval and McNemar's test over the presentations (:mod:`hsqbench.experiment.paired`).
 - Packed and pile CR: pairs are the objects of a round (removed or not, by each planner); the
-  interval over rounds resamples rounds, since objects of one round are not independent.
-- Packed GSR is not paired: after the first attempt the planners face different scenes.
+  interval and test are over rounds only, since objects of one round are not independent.
+- Packed and pile GSR: a round (the same draw) is the pair; each planner makes its own attempts
+  in it, so only the rounds pair up.
+- p-values are Holm-adjusted within each comparison (:mod:`hsqbench.experiment.holm`).
 """
 
 from __future__ import annotations
@@ -15,12 +18,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from hsqbench.experiment.cluster import MIN_CLUSTERS, cluster_interval
 from hsqbench.experiment.graspable import method_label
-from hsqbench.experiment.markdown import md_table
-from hsqbench.experiment.paired import BETTER, SAME, WORSE, PairedDifference
+from hsqbench.experiment.holm import holm_verdicts
+from hsqbench.experiment.cluster import N_RESAMPLES
+from hsqbench.experiment.markdown import md_table, p_text
+from hsqbench.experiment.over_clusters import ClusterDifference
+from hsqbench.experiment.paired import PairedDifference
 from hsqbench.experiment.results import STATUS_OK
 from hsqbench.experiment.run_data import RunData
+from hsqbench.experiment.sign_flip import N_DRAWS
 
 PAIRED_CSV = "paired.csv"
 PAIRED_OBJECTS_CSV = "paired_per_object.csv"
@@ -89,56 +95,136 @@ def object_pairs(mine: pd.DataFrame, ref: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["round", "object", "planner", "reference"])
 
 
-def _over(pairs: pd.DataFrame, cluster: str, confidence: float) -> tuple[float, float]:
-    """The paired difference's interval resampling ``cluster`` (NaN with too few clusters)."""
-    won = (pairs["planner"] & ~pairs["reference"]).astype(int)
-    lost = (~pairs["planner"] & pairs["reference"]).astype(int)
-    grouped = pd.DataFrame({"c": pairs[cluster], "d": won - lost, "n": 1}).groupby("c")
-    sums = grouped.sum()
-    if len(sums) < MIN_CLUSTERS:
-        return np.nan, np.nan
-    return cluster_interval(sums["d"].to_numpy(), sums["n"].to_numpy(), confidence)
+def round_gsr_counts(data: RunData, kind: str, planner: str, reference: str) -> pd.DataFrame:
+    """Per ``kind`` round both planners finished on the same draw: each one's successes and
+    attempts in it (columns ``k_planner``, ``n_planner``, ``k_reference``, ``n_reference``)."""
+    key = ["base_seed", "trial_index"]
+    ok_rounds = finished_rounds(data.rounds, kind)
+    att = data.attempts
+    if ok_rounds.empty or att.empty:
+        return pd.DataFrame(columns=["k_planner", "n_planner", "k_reference", "n_reference"])
+    att = att[(att["experiment"] == kind) & (att["status"] == STATUS_OK)]
+    per_round = att.groupby(["planner", *key])["success"].agg(["sum", "count"])
+    mine = ok_rounds[ok_rounds["planner"] == planner].set_index(key)
+    ref = ok_rounds[ok_rounds["planner"] == reference].set_index(key)
+    rows = []
+    for idx in mine.index.intersection(ref.index):
+        if mine.loc[idx, "objects"] != ref.loc[idx, "objects"]:  # another draw: not a pair
+            continue
+        a, b = (planner, *idx), (reference, *idx)
+        ka, na = per_round.loc[a] if a in per_round.index else (0, 0)
+        kb, nb = per_round.loc[b] if b in per_round.index else (0, 0)
+        rows.append({"k_planner": ka, "n_planner": na, "k_reference": kb, "n_reference": nb})
+    return pd.DataFrame(rows, columns=["k_planner", "n_planner", "k_reference", "n_reference"])
 
 
-def _verdict(low: float, high: float) -> str:
-    if not np.isfinite(low):
-        return "—"
-    return BETTER if low > 0 else WORSE if high < 0 else SAME
+def clustered(pairs: pd.DataFrame, cluster: str, confidence: float) -> ClusterDifference:
+    """The paired difference of ``pairs`` (columns ``planner``, ``reference``, ``cluster``)
+    over its clusters: bootstrap interval and exact sign-flip test."""
+    sums = (
+        pd.DataFrame(
+            {
+                "c": pairs[cluster],
+                "k_planner": pairs["planner"].astype(int),
+                "k_reference": pairs["reference"].astype(int),
+                "n": 1,
+            }
+        )
+        .groupby("c", sort=False)
+        .sum()
+    )
+    return ClusterDifference.of(
+        sums["k_planner"], sums["n"], sums["k_reference"], sums["n"], confidence
+    )
 
 
-def _row(comparison: str, planner: str, reference: str, pairs: pd.DataFrame, cluster: str,
-         confidence: float) -> dict[str, Any]:  # fmt: skip
+def _pairs_row(comparison: str, planner: str, reference: str, pairs: pd.DataFrame, cluster: str,
+               confidence: float) -> dict[str, Any]:  # fmt: skip
+    """A paired row: primary over clusters; for isolated GSR also over the presentations."""
     d = PairedDifference.of(pairs["planner"].to_numpy(), pairs["reference"].to_numpy(), confidence)
-    low, high = _over(pairs, cluster, confidence)
+    c = clustered(pairs, cluster, confidence)
+    # Objects of one round are not independent: no per-object test of CR.
+    per_presentation = comparison == "isolated GSR"
     return {
-        "comparison": comparison,
-        "planner": planner,
-        "reference": reference,
+        **_base(comparison, planner, reference, cluster, c),
         "pairs": d.n,
         "both": d.both,
         "only_planner": d.only_planner,
         "only_reference": d.only_reference,
         "neither": d.neither,
-        **d.summary_columns(),
-        "clusters": cluster + "s",
-        "cluster_ci_low_pp": 100 * low,
-        "cluster_ci_high_pp": 100 * high,
-        "cluster_verdict": _verdict(low, high),
+        "planner_successes": d.both + d.only_planner,
+        "planner_attempts": d.n,
+        "reference_successes": d.both + d.only_reference,
+        "reference_attempts": d.n,
+        "presentations_ci_low_pp": 100 * d.low if per_presentation else np.nan,
+        "presentations_ci_high_pp": 100 * d.high if per_presentation else np.nan,
+        "presentations_p_value": d.p_value if per_presentation else np.nan,
     }
 
 
+def _gsr_row(comparison: str, planner: str, reference: str, counts: pd.DataFrame,
+             confidence: float) -> dict[str, Any]:  # fmt: skip
+    """A round-level GSR row: each planner's own attempts in the same rounds."""
+    c = ClusterDifference.of(counts["k_planner"], counts["n_planner"], counts["k_reference"],
+                             counts["n_reference"], confidence)  # fmt: skip
+    return {
+        **_base(comparison, planner, reference, "round", c),
+        "planner_successes": int(counts["k_planner"].sum()),
+        "planner_attempts": int(counts["n_planner"].sum()),
+        "reference_successes": int(counts["k_reference"].sum()),
+        "reference_attempts": int(counts["n_reference"].sum()),
+    }
+
+
+def _base(comparison: str, planner: str, reference: str, cluster: str,
+          c: ClusterDifference) -> dict[str, Any]:  # fmt: skip
+    return {
+        "comparison": comparison,
+        "planner": planner,
+        "reference": reference,
+        "unit": cluster + "s",
+        "clusters": c.clusters,
+        "difference_pp": 100 * c.difference,
+        "ci_low_pp": 100 * c.low,
+        "ci_high_pp": 100 * c.high,
+        "p_value": c.p_value,
+    }
+
+
+def judge(table: pd.DataFrame, confidence: float) -> pd.DataFrame:
+    """``table`` with Holm-adjusted p and verdicts, one family per comparison (the planners of
+    one table), for the tests over clusters and, where present, over presentations."""
+    table = table.copy()
+    for prefix in ("", "presentations_"):
+        if f"{prefix}p_value" not in table:
+            table[f"{prefix}p_value"] = np.nan
+        table[f"{prefix}p_holm"] = np.nan
+        table[f"{prefix}verdict"] = "—"
+        for _, idx in table.groupby("comparison", sort=False).groups.items():
+            diff = table.loc[idx, "difference_pp"].to_numpy()
+            adjusted, words = holm_verdicts(diff, table.loc[idx, f"{prefix}p_value"], confidence)
+            table.loc[idx, f"{prefix}p_holm"] = adjusted
+            table.loc[idx, f"{prefix}verdict"] = words
+    return table
+
+
 def paired_table(data: RunData, reference: str = DEFAULT_REFERENCE) -> pd.DataFrame:
-    """One row per planner (not the reference) and comparison it has pairs in."""
+    """One row per planner (not the reference) and comparison it has pairs in: isolated GSR
+    over objects, packed and pile CR and GSR over rounds; verdicts Holm-adjusted per comparison."""
     rows = []
+    conf = data.confidence
     for p in (p for p in data.planners if p != reference):
         iso = isolated_pairs(data, p, reference)
         if len(iso):
-            rows.append(_row("isolated GSR", p, reference, iso, "object", data.confidence))
+            rows.append(_pairs_row("isolated GSR", p, reference, iso, "object", conf))
         for kind in _ROUND_KINDS:
             objs = round_pairs(data, kind, p, reference)
             if len(objs):
-                rows.append(_row(f"{kind} CR", p, reference, objs, "round", data.confidence))
-    return pd.DataFrame(rows)
+                rows.append(_pairs_row(f"{kind} CR", p, reference, objs, "round", conf))
+            counts = round_gsr_counts(data, kind, p, reference)
+            if len(counts) and counts["n_planner"].sum() and counts["n_reference"].sum():
+                rows.append(_gsr_row(f"{kind} GSR", p, reference, counts, conf))
+    return judge(pd.DataFrame(rows), conf) if rows else pd.DataFrame()
 
 
 def paired_per_object(data: RunData, reference: str = DEFAULT_REFERENCE) -> pd.DataFrame:
@@ -172,6 +258,43 @@ def _pp(v: float) -> str:
     return "—" if not np.isfinite(v) else f"{v:+.1f}"
 
 
+def _counts(r: pd.Series) -> str:
+    """won:lost of the pairs, or (GSR of rounds) each planner's successes/attempts."""
+    if np.isfinite(r.get("pairs", np.nan)):
+        return f"{int(r['only_planner'])}:{int(r['only_reference'])} of {int(r['pairs'])}"
+    return (
+        f"{int(r['planner_successes'])}/{int(r['planner_attempts'])} vs "
+        f"{int(r['reference_successes'])}/{int(r['reference_attempts'])}"
+    )
+
+
+def _presentations(r: pd.Series) -> str:
+    if not np.isfinite(r.get("presentations_p_value", np.nan)):
+        return "—"
+    return (
+        f"[{_pp(r['presentations_ci_low_pp'])}, {_pp(r['presentations_ci_high_pp'])}], "
+        f"p {p_text(r['presentations_p_holm'])}, {r['presentations_verdict']}"
+    )
+
+
+def paired_note(data: RunData, table: pd.DataFrame) -> str:
+    """The line under the paired table: units, tests, and the Holm families."""
+    conf = f"{100 * data.confidence:g} %"
+    families = table.groupby("comparison", sort=False).size()
+    sizes = ", ".join(f"{n} in {c}" for c, n in families.items())
+    return (
+        f"Difference = planner − reference, percentage points. Over objects (isolated GSR) or "
+        f"rounds (packed and pile CR and GSR): the {conf} cluster-bootstrap interval (BCa, "
+        f"{N_RESAMPLES:,} resamples) and a paired sign-flip test over those clusters (exact; GSR "
+        f"of rounds, whose attempts differ per planner: a swap permutation test, exact up to "
+        f"{N_DRAWS:,} patterns, else {N_DRAWS:,} draws, fixed seed). p Holm: p adjusted by "
+        f"Holm's method within each comparison (the rows of one table: {sizes}); the verdicts "
+        f"follow the adjusted p (< {1 - data.confidence:.2g}). On these presentations "
+        "(isolated): Newcombe's paired interval and the exact McNemar test, Holm-adjusted in the "
+        "same families, a claim about these poses of these objects only. See docs/statistics.md."
+    )
+
+
 def render_paired(data: RunData, table: pd.DataFrame, per_object: pd.DataFrame,
                   reference: str) -> list[str]:  # fmt: skip
     """Markdown lines of the paired section (a one-line note when there is nothing to pair)."""
@@ -181,32 +304,25 @@ def render_paired(data: RunData, table: pd.DataFrame, per_object: pd.DataFrame,
         return [*out, f"The reference planner {reference} did not run here: nothing to pair.", ""]
     if table.empty:
         return [*out, "No other planner ran the same presentations: nothing to pair.", ""]
-    out += [
-        f"Difference = planner − {reference}, percentage points, over the presentations both "
-        f"ran. CI: Newcombe's paired score interval ({conf}); p: exact McNemar test on the "
-        "discordant pairs (won:lost). Verdict: better or worse when p < "
-        f"{1 - data.confidence:.2g}. Over objects/rounds: the {conf} cluster-bootstrap interval "
-        "and its verdict, the claim about new objects (or rounds). See docs/statistics.md.",
-        "",
-    ]
-    heads = ["comparison", "planner vs reference", "difference", f"{conf} CI", "won:lost",
-             "pairs", "p (McNemar)", "verdict", "over objects/rounds", "verdict over them"]  # fmt: skip
+    heads = ["comparison", "planner vs reference", "difference", f"{conf} CI", "over",
+             "won:lost (pairs) or k/n", "p", "p Holm", "verdict",
+             f"on these presentations: {conf} CI, p Holm, verdict"]  # fmt: skip
     rows = [
         [
             r["comparison"],
             f"{method_label(r['planner'])} vs {reference}",
             _pp(r["difference_pp"]),
             f"[{_pp(r['ci_low_pp'])}, {_pp(r['ci_high_pp'])}]",
-            f"{int(r['only_planner'])}:{int(r['only_reference'])}",
-            str(int(r["pairs"])),
-            f"{r['p_value']:.3g}",
+            f"{int(r['clusters'])} {r['unit']}",
+            _counts(r),
+            p_text(r["p_value"]),
+            p_text(r["p_holm"]),
             f"**{r['verdict']}**",
-            f"[{_pp(r['cluster_ci_low_pp'])}, {_pp(r['cluster_ci_high_pp'])}] ({r['clusters']})",
-            str(r["cluster_verdict"]),
+            _presentations(r),
         ]
         for _, r in table.iterrows()
     ]
-    out += [md_table(heads, rows), ""]
+    out += [md_table(heads, rows), "", paired_note(data, table), ""]
     if not per_object.empty:
         out += _per_object(per_object, reference)
     return out

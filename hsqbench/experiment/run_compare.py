@@ -4,7 +4,9 @@ Trial seeds derive from (base seed, experiment, object, index) alone, so the sam
 two runs presents the same pose or draw: a change of code or config shows as attempts whose
 recorded columns differ. Per planner, the isolated attempts pair up (success in A, in B) and the
 packed and pile rounds' objects pair up (removed in A, in B), so B - A is a paired difference
-(:mod:`hsqbench.experiment.paired`): "worse" means B lost significantly more pairs than it won.
+(:mod:`hsqbench.experiment.paired`): "worse" means B lost significantly more pairs than it won,
+by the p-value Holm-adjusted over all of compare's tests. Rounds are the units of the CR test
+(objects of one round are not independent).
 """
 
 from __future__ import annotations
@@ -14,8 +16,9 @@ from typing import Any
 
 import pandas as pd
 
+from hsqbench.experiment.holm import holm_verdicts
 from hsqbench.experiment.paired import WORSE, PairedDifference
-from hsqbench.experiment.paired_table import finished_rounds, object_pairs
+from hsqbench.experiment.paired_table import clustered, finished_rounds, object_pairs
 from hsqbench.experiment.results import STATUS_OK
 from hsqbench.experiment.rows import ATTEMPT_COLUMNS, VOLATILE_COLUMNS
 from hsqbench.experiment.run_data import RunData
@@ -81,27 +84,47 @@ def isolated_pairs(merged: pd.DataFrame) -> pd.DataFrame:
     )
 
 
-def _difference(comparison: str, planner: str, a, b, confidence: float) -> dict[str, Any]:
-    d = PairedDifference.of(b, a, confidence)  # B is "the planner", A the reference
+def _row(comparison: str, planner: str, a_percent: float, b_percent: float, lost: int, won: int,
+         pairs: int) -> dict[str, Any]:  # fmt: skip
     return {
         "comparison": comparison,
         "planner": planner,
-        "pairs": d.n,
-        "a_percent": 100 * (d.both + d.only_reference) / d.n,
-        "b_percent": 100 * (d.both + d.only_planner) / d.n,
-        "success_to_failure": d.only_reference,
-        "failure_to_success": d.only_planner,
-        **d.summary_columns(),
+        "pairs": pairs,
+        "a_percent": a_percent,
+        "b_percent": b_percent,
+        "success_to_failure": lost,
+        "failure_to_success": won,
     }
 
 
 def run_differences(a: RunData, b: RunData, merged: pd.DataFrame) -> pd.DataFrame:
-    """B - A per planner: isolated GSR over paired attempts, packed and pile CR over the
-    objects of paired rounds (the same trial key, the same draw)."""
+    """B - A per planner: isolated GSR over paired attempts (Newcombe, exact McNemar: the
+    question is these presentations), packed and pile CR over paired rounds (the same trial
+    key, the same draw; bootstrap interval and exact sign-flip test over rounds, since the
+    objects of a round are not independent). p Holm-adjusted over all of them, and the verdicts
+    follow the adjusted p."""
     rows = []
     iso = isolated_pairs(merged)
     for planner, sub in iso.groupby("planner", sort=False):
-        rows.append(_difference("isolated GSR", str(planner), sub["a"], sub["b"], a.confidence))
+        d = PairedDifference.of(sub["b"], sub["a"], a.confidence)  # B is "the planner"
+        rows.append(
+            {
+                **_row(
+                    "isolated GSR",
+                    str(planner),
+                    100 * (d.both + d.only_reference) / d.n,
+                    100 * (d.both + d.only_planner) / d.n,
+                    d.only_reference,
+                    d.only_planner,
+                    d.n,
+                ),  # fmt: skip
+                "over": "presentations",
+                "difference_pp": 100 * d.difference,
+                "ci_low_pp": 100 * d.low,
+                "ci_high_pp": 100 * d.high,
+                "p_value": d.p_value,
+            }
+        )
     for kind in ("packed", "pile"):
         ra, rb = finished_rounds(a.rounds, kind), finished_rounds(b.rounds, kind)
         if ra.empty or rb.empty:
@@ -111,10 +134,37 @@ def run_differences(a: RunData, b: RunData, merged: pd.DataFrame) -> pd.DataFram
                 ra[ra["planner"] == planner].set_index("trial_key"),
                 rb[rb["planner"] == planner].set_index("trial_key"),
             )
-            if len(pairs):
-                rows.append(_difference(f"{kind} CR", str(planner), pairs["planner"],
-                                        pairs["reference"], a.confidence))  # fmt: skip
-    return pd.DataFrame(rows)
+            if not len(pairs):
+                continue
+            ab = pairs.rename(columns={"planner": "reference", "reference": "planner"})
+            c = clustered(ab, "round", a.confidence)
+            won = int((ab["planner"] & ~ab["reference"]).sum())
+            lost = int((~ab["planner"] & ab["reference"]).sum())
+            rows.append(
+                {
+                    **_row(
+                        f"{kind} CR",
+                        str(planner),
+                        100 * ab["reference"].mean(),
+                        100 * ab["planner"].mean(),
+                        lost,
+                        won,
+                        len(ab),
+                    ),  # fmt: skip
+                    "over": f"{c.clusters} rounds",
+                    "difference_pp": 100 * c.difference,
+                    "ci_low_pp": 100 * c.low,
+                    "ci_high_pp": 100 * c.high,
+                    "p_value": c.p_value,
+                }
+            )
+    table = pd.DataFrame(rows)
+    if table.empty:
+        return table
+    table["p_holm"], table["verdict"] = holm_verdicts(
+        table["difference_pp"].to_numpy(), table["p_value"].to_numpy(), a.confidence
+    )
+    return table
 
 
 def object_transitions(merged: pd.DataFrame) -> pd.DataFrame:
