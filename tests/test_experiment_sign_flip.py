@@ -101,4 +101,4 @@ def test_interval_of_a_paired_ratio_difference() -> None:
     k_p, k_r = rng.binomial(n_p, 0.8), rng.binomial(n_r, 0.5)
     low, high = paired_ratio_interval(k_p, n_p, k_r, n_r)
     d = k_p.sum() / n_p.sum() - k_r.sum() / n_r.sum()
-    assert low < d < high and 0 < low and high - low < 0.4
+    assert low < d < high and low > 0 and high - low < 0.4

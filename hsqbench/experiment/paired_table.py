@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from hsqbench.experiment.cluster import N_RESAMPLES
 from hsqbench.experiment.graspable import method_label
 from hsqbench.experiment.holm import holm_verdicts
-from hsqbench.experiment.cluster import N_RESAMPLES
 from hsqbench.experiment.markdown import md_table, p_text
 from hsqbench.experiment.over_clusters import ClusterDifference
 from hsqbench.experiment.paired import PairedDifference

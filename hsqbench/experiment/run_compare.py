@@ -117,7 +117,7 @@ def run_differences(a: RunData, b: RunData, merged: pd.DataFrame) -> pd.DataFram
                     d.only_reference,
                     d.only_planner,
                     d.n,
-                ),  # fmt: skip
+                ),
                 "over": "presentations",
                 "difference_pp": 100 * d.difference,
                 "ci_low_pp": 100 * d.low,
@@ -150,7 +150,7 @@ def run_differences(a: RunData, b: RunData, merged: pd.DataFrame) -> pd.DataFram
                         lost,
                         won,
                         len(ab),
-                    ),  # fmt: skip
+                    ),
                     "over": f"{c.clusters} rounds",
                     "difference_pp": 100 * c.difference,
                     "ci_low_pp": 100 * c.low,

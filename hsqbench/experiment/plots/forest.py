@@ -123,7 +123,7 @@ def _legend(fig: Any) -> None:
             color="0.3",
             lw=2.2,
             label="over objects or rounds (cluster bootstrap)",
-        ),  # fmt: skip
+        ),
         Line2D([], [], color="0.3", lw=0.9, label="over presentations (Newcombe)"),
     ]
     fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8, frameon=False)
