@@ -100,7 +100,7 @@ SWEEPS ?= depth_noise calibration cameras pad_friction
 SWEEP_PLANNERS ?=
 SWEEP_ARGS ?=
 sweeps: $(STAMP)
-	$(PY) -m hsqbench.cli sweep $(SWEEPS) --run sweeps --jobs $(JOBS) \
+	$(PY) -m hsqbench.cli sweep $(SWEEPS) --run sweeps --jobs $(JOBS) --resume \
 		$(if $(SWEEP_PLANNERS),--planners $(SWEEP_PLANNERS)) $(SWEEP_ARGS)
 
 # The canonical runs behind README.md and docs/ (the list: configs/canonical.yaml), into

@@ -14,7 +14,7 @@ def test_input_errors_are_one_line_and_exit_2(monkeypatch, capsys) -> None:
         raise ValueError("--thing must be > 0, got -1")
 
     monkeypatch.setattr(report, "run", bad_input)
-    assert cli.main(["report", "somewhere"]) == 2
+    assert cli.main(["report", "--run", "somewhere"]) == 2
     err = capsys.readouterr().err
     assert err.strip() == "hsqbench report: error: --thing must be > 0, got -1"
 
@@ -25,8 +25,8 @@ def test_internal_errors_keep_their_traceback(monkeypatch) -> None:
 
     monkeypatch.setattr(report, "run", bug)
     with pytest.raises(RuntimeError, match="invariant") as info:
-        cli.main(["report", "somewhere"])
+        cli.main(["report", "--run", "somewhere"])
     assert info.traceback[-1].name == "bug"
     monkeypatch.setattr(report, "run", lambda args: {}["missing"])
     with pytest.raises(KeyError):
-        cli.main(["report", "somewhere"])
+        cli.main(["report", "--run", "somewhere"])

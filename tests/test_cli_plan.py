@@ -72,7 +72,8 @@ def test_reads_each_format(tmp_path, capsys, suffix, binary) -> None:
             "0",
             "--seed",
             "3",
-            "--packed",
+            "--scene",
+            "packed",
         ]
     )
     assert code == 0

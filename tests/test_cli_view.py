@@ -136,8 +136,9 @@ def test_web_ports_are_checked(small_rrd, capsys):
 def test_the_old_port_option_still_works_with_a_note(small_rrd, monkeypatch, capsys):
     monkeypatch.setattr(view, "_serve_web", lambda summary, web, rrd: print(f"ports {web} {rrd}"))
     assert main(["view", str(small_rrd), "--web", "--port", "9191"]) == 0
-    out = capsys.readouterr().out
-    assert "--port is now --web-port" in out and f"ports 9191 {view.RRD_PORT}" in out
+    captured = capsys.readouterr()
+    assert "--port is deprecated, use --web-port" in captured.err
+    assert f"ports 9191 {view.RRD_PORT}" in captured.out
 
 
 def test_has_display():

@@ -97,8 +97,8 @@ def test_a_pip_installed_planner_is_listed_and_benchmarked_and_joins_another_run
     source = json.loads((run_dir / "run.json").read_text())["backend"]["planner_sources"]
     assert source["topdown-rules"]["version"] == "0.1.0"
 
-    # The same protocol's runs share a table (report --with), whoever made them.
-    _cli("report", str(run_dir), "--with", str(topdown_run), env=env)
+    # The same protocol's runs share a table (report --join), whoever made them.
+    _cli("report", "--run", str(run_dir), "--join", str(topdown_run), env=env)
     table = (run_dir / "tables.md").read_text()
     assert all(f"| {p} |" in table for p in ("topdown-rules", "topdown", "hsq"))
 

@@ -144,8 +144,8 @@ def test_a_run_without_the_reference_says_so(run_dir: Path, tmp_path: Path) -> N
 def test_report_command_takes_the_reference(run_dir: Path, capsys) -> None:
     from hsqbench.cli import main
 
-    assert main(["report", str(run_dir), "--reference", "single-sq"]) == 0
+    assert main(["report", "--run", str(run_dir), "--reference", "single-sq"]) == 0
     md = (run_dir / TABLES_MD).read_text()
     assert "| isolated GSR | hsq vs single-sq |" in md
-    assert main(["report", str(run_dir), "--reference", "gpd"]) == 2
+    assert main(["report", "--run", str(run_dir), "--reference", "gpd"]) == 2
     assert "--reference gpd: no rows of that planner" in capsys.readouterr().err

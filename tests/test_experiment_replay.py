@@ -78,26 +78,38 @@ def test_the_replay_executes_the_recorded_pose(run_dir, config):
 
 
 def test_cli_replays_a_trial_and_says_it_matched(run_dir, capsys):
-    assert main(["replay", str(run_dir), "--trial", KEY]) == 0
+    assert main(["replay", "--run", str(run_dir), "--trial", KEY]) == 0
     out = capsys.readouterr().out
     assert f"{KEY} #0: success -> success (" in out
     assert "1 of 1 replayed attempts ended as recorded" in out
 
 
 def test_cli_refuses_unknown_trials_and_bad_settings(run_dir, capsys):
-    assert main(["replay", str(run_dir), "--trial", "isolated/hsq/s0/mug/000"]) == 2
+    assert main(["replay", "--run", str(run_dir), "--trial", "isolated/hsq/s0/mug/000"]) == 2
     err = capsys.readouterr().err
     assert "no finished trial 'isolated/hsq/s0/mug/000'" in err and KEY in err
-    assert main(["replay", str(run_dir), "--set", "execution.lift_height_m"]) == 2
+    assert main(["replay", "--run", str(run_dir), "--set", "execution.lift_height_m"]) == 2
     assert "write KEY=VALUE" in capsys.readouterr().err
-    assert main(["replay", str(run_dir), "--outcome", "dropped"]) == 2
+    assert main(["replay", "--run", str(run_dir), "--outcome", "dropped"]) == 2
     assert "no finished trial matches" in capsys.readouterr().err
 
 
 def test_cli_replans_and_writes_the_comparison(run_dir, tmp_path, capsys):
     out = tmp_path / "replay.csv"
     assert (
-        main(["replay", str(run_dir), "--replan", "--detail", "in the bin", "--out", str(out)]) == 0
+        main(
+            [
+                "replay",
+                "--run",
+                str(run_dir),
+                "--replan",
+                "--detail",
+                "in the bin",
+                "--csv",
+                str(out),
+            ]
+        )
+        == 0
     )
     text = capsys.readouterr().out
     assert f"{KEY} #0: success -> success (" in text and " ~" not in text
@@ -112,11 +124,12 @@ def test_cli_replans_and_writes_the_comparison(run_dir, tmp_path, capsys):
 
 
 def test_cli_refuses_filters_that_match_nothing_and_a_missing_out_folder(run_dir, capsys):
-    assert main(["replay", str(run_dir), "--detail", "no such detail"]) == 2
+    assert main(["replay", "--run", str(run_dir), "--detail", "no such detail"]) == 2
     assert "no finished trial matches" in capsys.readouterr().err
-    assert main(["replay", str(run_dir), "--failed-graspable"]) == 2  # its one attempt succeeded
+    # Its one attempt succeeded.
+    assert main(["replay", "--run", str(run_dir), "--failed-graspable"]) == 2
     assert "no finished trial matches" in capsys.readouterr().err
-    assert main(["replay", str(run_dir), "--out", "/nonexistent/dir/x.csv"]) == 2
+    assert main(["replay", "--run", str(run_dir), "--csv", "/nonexistent/dir/x.csv"]) == 2
     assert "does not exist" in capsys.readouterr().err
 
 

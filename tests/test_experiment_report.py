@@ -170,9 +170,9 @@ def test_report_command(run_dir: Path, capsys) -> None:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        assert main(["report", str(run_dir)]) == 0
+        assert main(["report", "--run", str(run_dir)]) == 0
     assert "tables.md" in capsys.readouterr().out
-    assert main(["report", str(run_dir / "nope")]) == 2
+    assert main(["report", "--run", str(run_dir / "nope")]) == 2
     assert "not a folder" in capsys.readouterr().err
 
 

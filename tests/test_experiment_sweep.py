@@ -242,12 +242,12 @@ def test_cli_builds_an_ad_hoc_sweep_with_yaml_values():
     assert sweep.seeds == (3, 4) and sweep.parameters[0].name == "cameras"
     # --seeds replaces the protocols' own seeds too; --attempts-per-object keeps them.
     assert all(point_config(p, sweep).seeds == (3, 4) for p in sweep.protocols)
-    (sweep,) = _sweeps(build_parser().parse_args(["sweep", "cameras", "--protocol", "ycb"]))
+    (sweep,) = _sweeps(build_parser().parse_args(["sweep", "cameras", "--protocols", "ycb"]))
     assert [p.name for p in sweep.protocols] == ["ycb"]
     with pytest.raises(
         CommandError, match="not a protocol of sweep 'cameras'; its protocols: paper, ycb"
     ):
-        _sweeps(build_parser().parse_args(["sweep", "cameras", "--protocol", "ycbb"]))
+        _sweeps(build_parser().parse_args(["sweep", "cameras", "--protocols", "ycbb"]))
     args = build_parser().parse_args(["sweep", "cameras", "--attempts-per-object", "2"])
     (sweep,) = _sweeps(args)
     paper, ycb = sweep.protocols

@@ -1,4 +1,4 @@
-"""`hsqbench scene --xml DIR`: a self-contained MJCF of a composed scene that opens on its own
+"""`hsqbench scene --mjcf DIR`: a self-contained MJCF of a composed scene that opens on its own
 and steps like the in-memory model."""
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def _step(model: mujoco.MjModel, n: int) -> np.ndarray:
 
 def test_exported_scene_opens_alone_and_steps_like_the_model(tmp_path, capsys) -> None:
     out = tmp_path / "export"
-    args = ["scene", "--scene", "packed", "--seed", "3", "--objects", *OBJECTS, "--xml", str(out)]
+    args = ["scene", "--scene", "packed", "--seed", "3", "--objects", *OBJECTS, "--mjcf", str(out)]
     assert main(args) == 0
     assert "python -m mujoco.viewer --mjcf" in capsys.readouterr().out
     moved = shutil.move(out, tmp_path / "elsewhere")  # self-contained: no path outside it

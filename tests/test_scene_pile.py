@@ -161,7 +161,7 @@ def test_scene_command_builds_a_pile(tmp_path, capsys) -> None:
         *OBJECTS[:3],
         "--png",
         str(out),
-        "--xml",
+        "--mjcf",
         str(xml),
     ]
     assert main(args) == 0

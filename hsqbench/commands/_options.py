@@ -1,13 +1,24 @@
 """The options several commands share, defined once so that each means the same everywhere.
 
-- ``--protocol``: a benchmark protocol (``paper``, ``quick`` or a YAML path);
-- ``--trial-config``, ``--planner-config``: the config of one trial, of one planner;
-- ``--scene``: a scene kind (isolated, packed, pile);
-- ``--jobs``: worker processes, a positive integer, checked when the command line is read;
-- ``--planner`` / ``--planners``: names or plugin specs (``module:Name``, ``file.py:Name``).
+docs/cli.md is the vocabulary (idea -> option -> commands -> old spellings), and
+tests/test_cli_vocabulary.py holds every command's parser to it. In short:
 
-An old spelling (``--config``, ``--kind``) keeps working for one release, with a one-line
-deprecation note on stderr.
+- ``--planner PLANNER`` where a command uses one planner, ``--planners PLANNER...`` where it
+  takes several (names or plugin specs ``module:Name``, ``file.py:Name``);
+- ``--run RUN``: the run folder a command writes or reads (a name under runs/ or a path);
+- ``--protocol NAME`` (one) / ``--protocols NAME...`` (several): benchmark protocols;
+- ``--seed N`` (one) / ``--seeds N...`` (several base seeds);
+- ``--trial-config``, ``--planner-config``, ``--assets-config``: a whole config;
+  ``--set KEY=VALUE``: one value of it changed;
+- outputs are named by their format: ``--json PATH``, ``--csv PATH``, ``--png PATH``,
+  ``--mjcf DIR``, ``--rerun PATH``;
+- ``--scene`` / ``--experiments``: scene kinds (isolated, packed, pile);
+- ``--resume``, ``--retry-errors``, ``--force``, ``--no-report``: alike in every command that runs
+  trials into a run folder;
+- ``--jobs``, ``--executor``, ``--address``: where and how wide trials run.
+
+An old spelling keeps working for one release: it stores exactly what the new one does, after
+one line on stderr naming the new one.
 """
 
 from __future__ import annotations
@@ -15,6 +26,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 SCENES = ("isolated", "packed", "pile")
@@ -24,28 +36,73 @@ PLANNER_SPEC_HELP = (
     "path/to/file.py:Name"
 )
 
+RUN_HELP = "a run folder: a name under runs/ or a path"
+
+
+def _note(old: str, new: str) -> None:
+    print(
+        f"hsqbench: {old} is deprecated, use {new} (the old spelling will be removed in the "
+        "next release)",
+        file=sys.stderr,
+    )
+
 
 class _Deprecated(argparse.Action):
-    """Stores like the new option, after a one-line note that the old spelling goes."""
+    """Stores like the new option, after a one-line note that the old spelling goes. With
+    ``nargs=0`` (an old on/off flag such as ``--packed``) it stores ``const``."""
 
     def __init__(self, option_strings: Sequence[str], dest: str, new: str = "", **kw: Any):
         self.new = new
         super().__init__(option_strings, dest, **kw)
 
     def __call__(self, parser, namespace, values, option_string=None) -> None:
-        print(
-            f"hsqbench: {option_string} is deprecated here, use {self.new} (the old spelling "
-            "will be removed in the next release)",
-            file=sys.stderr,
-        )
+        _note(option_string or self.dest, self.new)
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
+
+
+class _DeprecatedPositional(argparse.Action):
+    """A positional argument that became an option (``report RUN`` -> ``report --run RUN``):
+    accepted, with the note, when given; silent when absent."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, new: str = "", **kw: Any):
+        self.new = new
+        super().__init__(option_strings, dest, **kw)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        if values is None or values == self.default:
+            return
+        _note(f"the positional {self.metavar}", self.new)
+        if getattr(namespace, self.dest, None) not in (None, self.default):
+            parser.error(f"give the run folder once, as {self.new}")
         setattr(namespace, self.dest, values)
 
 
-def deprecated(parser: argparse.ArgumentParser, old: str, new: str, dest: str, **kw: Any) -> None:
-    """Accept ``old`` as a hidden, deprecated spelling of ``new`` (same ``dest``)."""
+def deprecated(
+    parser: argparse.ArgumentParser,
+    old: str,
+    new: str,
+    dest: str,
+    *,
+    flag: Any = None,
+    default: Any = None,
+    **kw: Any,
+) -> None:
+    """Accept ``old`` as a hidden, deprecated spelling of ``new`` (same ``dest``). ``flag``: the
+    value an old on/off switch stands for (``--packed`` is ``--scene packed``)."""
+    if flag is not None:
+        kw.update(nargs=0, const=flag)
     parser.add_argument(
-        old, dest=dest, action=_Deprecated, new=new, help=argparse.SUPPRESS, default=None, **kw
+        old, dest=dest, action=_Deprecated, new=new, help=argparse.SUPPRESS, default=default, **kw
     )
+
+
+def deprecated_aliases(parser: argparse.ArgumentParser) -> dict[str, str]:
+    """``{old spelling: new spelling}`` of one parser (for docs/cli.md's test)."""
+    return {
+        (a.option_strings[0] if a.option_strings else f"positional {a.metavar}"): a.new
+        for a in parser._actions
+        if isinstance(a, _Deprecated | _DeprecatedPositional)
+    }
 
 
 def positive_int(text: str) -> int:
@@ -88,17 +145,108 @@ def add_executor(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_protocol(parser: argparse.ArgumentParser, default: str = "paper") -> None:
-    """``--protocol NAME`` (old spelling ``--config``)."""
+# --- planners ---------------------------------------------------------------------------------
+
+
+def add_planner(parser: argparse.ArgumentParser, help_text: str, default: str | None) -> None:
+    """``--planner PLANNER``: the one planner a command uses (or filters by)."""
+    parser.add_argument("--planner", default=default, metavar="PLANNER", help=help_text)
+
+
+def add_planners(parser: argparse.ArgumentParser, help_text: str, dest: str = "planners") -> None:
+    """``--planners PLANNER...``: the planners a command runs or selects."""
+    parser.add_argument(
+        "--planners", dest=dest, nargs="+", default=None, metavar="PLANNER", help=help_text
+    )
+
+
+# --- run folders ------------------------------------------------------------------------------
+
+
+def add_run(
+    parser: argparse.ArgumentParser,
+    help_text: str,
+    *,
+    default: str | None = None,
+    dest: str = "run",
+    reads: bool = False,
+    positional_alias: bool = False,
+) -> None:
+    """``--run RUN``. ``reads``: the command reads an existing run, given as a Path
+    (:func:`as_path`); ``positional_alias``: the command used to take the run folder as its first
+    positional argument (report, replay); that still works, with the note, and ``--run`` is then
+    required (checked by :func:`check_required`)."""
+    kind = as_path if reads else str
+    parser.add_argument(
+        "--run", dest=dest, type=kind, default=default, metavar="RUN", help=help_text
+    )
+    if positional_alias:
+        parser.add_argument(
+            dest,
+            nargs="?",
+            type=kind,
+            default=None,
+            metavar="RUN",
+            action=_DeprecatedPositional,
+            new="--run RUN",
+            help=argparse.SUPPRESS,
+        )
+        require(parser, dest, "--run RUN")
+
+
+def require(parser: argparse.ArgumentParser, dest: str, option: str) -> None:
+    """Mark ``dest`` as required once both its spellings have been read."""
+    required = dict(parser.get_default("_required") or {})
+    required[dest] = option
+    parser.set_defaults(_required=required, _parser=parser)
+
+
+def check_required(args: argparse.Namespace) -> None:
+    """argparse's usage error (exit 2) for a required option given in neither spelling."""
+    for dest, option in (getattr(args, "_required", None) or {}).items():
+        if getattr(args, dest, None) is None:
+            args._parser.error(f"the following arguments are required: {option}")
+
+
+def as_path(value: str | Path | None) -> Path | None:
+    """A ``--run`` value the command reads, as a Path: a folder path, else a name under runs/."""
+    if value is None:
+        return None
+    path = Path(value)
+    if path.exists() or "/" in str(value):
+        return path
+    from hsqbench.settings import RESULTS_DIR
+
+    return RESULTS_DIR / str(value)
+
+
+# --- protocols and seeds ----------------------------------------------------------------------
+
+
+def add_protocol(
+    parser: argparse.ArgumentParser, default: str | None = "paper", help_text: str | None = None
+) -> None:
+    """``--protocol NAME`` (old spelling ``--config``, where ``--config`` named it).
+    ``default`` None: no protocol unless one is named (``assets build``)."""
     parser.add_argument(
         "--protocol",
         default=None,
         metavar="NAME",
-        help="benchmark protocol: paper, ycb, quick, ... (configs/protocols/) or a YAML path "
+        help=help_text
+        or "benchmark protocol: paper, ycb, quick, ... (configs/protocols/) or a YAML path "
         f"(default: {default})",
     )
-    deprecated(parser, "--config", "--protocol", "protocol")
-    parser.set_defaults(protocol_default=default)
+    if default is not None:
+        deprecated(parser, "--config", "--protocol", "protocol")
+        parser.set_defaults(protocol_default=default)
+
+
+def add_protocols(parser: argparse.ArgumentParser, help_text: str, dest: str = "protocol") -> None:
+    """``--protocols NAME...`` (old spelling, in ``sweep``: ``--protocol NAME...``)."""
+    parser.add_argument(
+        "--protocols", dest=dest, nargs="+", default=None, metavar="NAME", help=help_text
+    )
+    deprecated(parser, "--protocol", "--protocols", dest, nargs="+")
 
 
 def protocol_of(args: argparse.Namespace) -> str:
@@ -110,5 +258,87 @@ def protocol_of(args: argparse.Namespace) -> str:
     return name
 
 
+def add_seed(parser: argparse.ArgumentParser, help_text: str, default: int | None = 0) -> None:
+    parser.add_argument("--seed", type=int, default=default, metavar="N", help=help_text)
+
+
+def add_seeds(parser: argparse.ArgumentParser, help_text: str) -> None:
+    parser.add_argument("--seeds", nargs="+", type=int, default=None, metavar="N", help=help_text)
+
+
+# --- scenes -----------------------------------------------------------------------------------
+
+
 def add_scene(parser: argparse.ArgumentParser, default: str, help_text: str) -> None:
     parser.add_argument("--scene", choices=SCENES, default=default, help=help_text)
+
+
+def add_experiments(
+    parser: argparse.ArgumentParser,
+    help_text: str = "only these experiments",
+    default: list[str] | None = None,
+    choices: Sequence[str] = SCENES,
+) -> None:
+    parser.add_argument(
+        "--experiments", nargs="+", choices=choices, default=default, help=help_text
+    )
+
+
+# --- run control ------------------------------------------------------------------------------
+
+
+def add_run_control(parser: argparse.ArgumentParser, resume_help: str) -> None:
+    """``--resume``, ``--retry-errors``, ``--force``, ``--no-report``: how a command that runs
+    trials into a run folder treats what is there, and whether it writes the report after."""
+    parser.add_argument("--resume", action="store_true", help=resume_help)
+    parser.add_argument(
+        "--retry-errors",
+        action="store_true",
+        help="with --resume, run again the trials that failed with an infrastructure error "
+        "(never failed grasps)",
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="move an existing run folder aside (<name>.replaced-<time>) and start again",
+    )
+    parser.add_argument(
+        "--no-report", action="store_true", help="do not write the tables and plots after the run"
+    )
+
+
+# --- configs and overrides --------------------------------------------------------------------
+
+
+def add_set(parser: argparse.ArgumentParser, what: str, example: str) -> None:
+    """``--set KEY=VALUE`` (repeatable): one value of a config changed for this command."""
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help=f"change this value of the {what} (repeatable), e.g. {example}",
+    )
+
+
+# --- outputs ----------------------------------------------------------------------------------
+
+
+def add_output(
+    parser: argparse.ArgumentParser,
+    fmt: str,
+    help_text: str,
+    *,
+    folder: bool = False,
+    dest: str | None = None,
+) -> None:
+    """``--<fmt> PATH`` (a file) or ``--<fmt> DIR`` (a folder): what the command writes, named
+    by its format."""
+    parser.add_argument(
+        f"--{fmt}",
+        dest=dest or fmt,
+        type=Path,
+        default=None,
+        metavar="DIR" if folder else "PATH",
+        help=help_text,
+    )

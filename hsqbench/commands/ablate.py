@@ -1,7 +1,7 @@
 """``hsqbench ablate``: the benchmark with hsq, hsq-paper and hsq with each addition off.
 
 It only builds the planner list (``hsq``, ``hsq-paper``, ``hsq-no-<addition>`` for each chosen
-addition of :mod:`hsqbench.planner.hsq.additions`, plus any ``--with`` baselines) and runs the
+addition of :mod:`hsqbench.planner.hsq.additions`, plus any ``--planners`` baselines) and runs the
 protocol's experiments with it through the benchmark runner, into runs/<run>/ with the usual
 tables: each row against ``hsq`` is what that addition buys.
 """
@@ -14,9 +14,16 @@ from pathlib import Path
 
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
+    RUN_HELP,
     add_executor,
+    add_experiments,
     add_jobs,
+    add_planners,
     add_protocol,
+    add_run,
+    add_run_control,
+    add_seeds,
+    deprecated,
     protocol_of,
 )
 
@@ -25,9 +32,7 @@ HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions of
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_protocol(parser)
-    parser.add_argument(
-        "--run", default=None, metavar="NAME", help="run name under runs/ (or a folder path)"
-    )
+    add_run(parser, f"{RUN_HELP}; default ablate-<protocol>-<UTC time>")
     parser.add_argument(
         "--additions",
         nargs="+",
@@ -36,26 +41,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="only these additions (default: each that is on and not superseded; see "
         "configs/planner.yaml additions:)",
     )
-    parser.add_argument(
-        "--with",
+    add_planners(
+        parser,
+        f"other planners to run alongside, e.g. antipodal: {PLANNER_SPEC_HELP}",
         dest="extra",
-        nargs="+",
-        default=(),
-        metavar="PLANNER",
-        help=f"other planners to run alongside, e.g. antipodal: {PLANNER_SPEC_HELP}",
     )
+    deprecated(parser, "--with", "--planners", "extra", nargs="+")
+    add_seeds(parser, "base seeds instead of the protocol's (a run of its own)")
     add_jobs(parser)
     add_executor(parser)
-    parser.add_argument(
-        "--experiments",
-        nargs="+",
-        choices=("isolated", "packed", "pile"),
-        default=None,
-        help="only these experiments",
-    )
-    parser.add_argument("--resume", action="store_true", help="continue the run --run NAME")
-    parser.add_argument("--force", action="store_true", help="move an existing run folder aside")
-    parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
+    add_experiments(parser)
+    add_run_control(parser, "continue the run --run RUN: finished trials are skipped")
 
 
 def ablation_planner_list(additions: list[str] | None, extra: tuple[str, ...] = ()) -> list[str]:
@@ -113,13 +109,17 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.experiment.runner import run_benchmark
     from hsqbench.runs import run_folder
 
+    if args.retry_errors and not args.resume:
+        raise CommandError("--retry-errors only applies with --resume --run RUN")
     if args.resume and args.run is None:
-        raise CommandError("--resume needs --run NAME (the run to continue)")
+        raise CommandError("--resume needs --run RUN (the run to continue)")
     from hsqbench.planner.registry import resolve_planners
 
     protocol = protocol_of(args)
-    planners = ablation_planner_list(args.additions, tuple(resolve_planners(args.extra)))
+    planners = ablation_planner_list(args.additions, tuple(resolve_planners(args.extra or ())))
     config = dataclasses.replace(load_experiment_config(protocol), planners=tuple(planners))
+    if args.seeds is not None:
+        config = dataclasses.replace(config, seeds=tuple(args.seeds))
     run_dir = run_folder(args.run, f"ablate-{Path(protocol).stem}")
     print(f"run folder: {run_dir}; planners: {', '.join(planners)}", file=sys.stderr)
     try:
@@ -130,6 +130,7 @@ def run(args: argparse.Namespace) -> int:
             experiments=args.experiments,
             resume=args.resume,
             force=args.force,
+            retry_errors=args.retry_errors,
             config_name=f"{protocol} (ablation)",
         )
     except TrialRunnerUnavailable as exc:

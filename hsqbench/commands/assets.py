@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from hsqbench.commands._options import add_jobs, deprecated
+from hsqbench.commands._options import add_jobs, add_protocol, deprecated
 
 HELP = "list, build, download (YCB, CC BY 4.0) or import the objects of the library"
 
@@ -25,22 +25,31 @@ ATTRIBUTION.md written by `assets download` with the meshes, and credit YCB in r
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = _EPILOG
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
-    parser.add_argument(
-        "--assets-config",
-        default="assets",
-        metavar="NAME",
-        help="the object library's config: a name in configs/ or a YAML path (default: assets)",
-    )
-    deprecated(parser, "--config", "--assets-config", "assets_config")
+    _add_assets_config(parser, "assets")
     sub = parser.add_subparsers(dest="assets_command", metavar="ACTION", required=True)
 
     p = sub.add_parser(
         "list", help="show each object: source, mass, size, hull count, built or not"
     )
+    _add_assets_config(p)
     p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="only this source")
     _add_build(sub)
     _add_download(sub)
     _add_import(sub)
+
+
+def _add_assets_config(parser: argparse.ArgumentParser, default: str | None = None) -> None:
+    """``--assets-config NAME``, before the action or after it (each action takes it too; its
+    default there is left unset so that one given before the action stands)."""
+    parser.add_argument(
+        "--assets-config",
+        default=argparse.SUPPRESS if default is None else default,
+        metavar="NAME",
+        help="the object library's config: a name in configs/ or a YAML path (default: assets)",
+    )
+    # Neither spelling after the action may reset a value given before it.
+    unset = argparse.SUPPRESS if default is None else None
+    deprecated(parser, "--config", "--assets-config", "assets_config", default=unset)
 
 
 def _add_build(sub: argparse._SubParsersAction) -> None:
@@ -48,18 +57,16 @@ def _add_build(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "build",
         help="build objects (convex decomposition, inertia, MuJoCo meshes): NAME..., "
-        "--protocol CONFIG, --source SOURCE or --all",
+        "--protocol NAME, --source SOURCE or --all",
         description="Build objects once into the cache (HSQ_CACHE_DIR). Say which: names, the "
         "objects of a benchmark protocol (--protocol paper), one source (--source procedural) "
         "or the whole library (--all; minutes of CoACD per new YCB object). `hsqbench "
         "benchmark` builds the objects of its protocol itself, so this is never required.",
     )
+    _add_assets_config(p)
     p.add_argument("names", nargs="*", metavar="NAME", help="objects to build")
-    p.add_argument(
-        "--protocol",
-        metavar="CONFIG",
-        default=None,
-        help="the objects a benchmark protocol uses (paper, quick, ... or a YAML path)",
+    add_protocol(
+        p, None, "the objects a benchmark protocol uses (paper, quick, ... or a YAML path)"
     )
     p.add_argument("--source", choices=["ycb", "procedural", "imported"], help="every object of it")
     p.add_argument("--all", action="store_true", help="every object of the library")
@@ -70,17 +77,16 @@ def _add_download(sub: argparse._SubParsersAction) -> None:
     """``assets download``: which YCB scans to fetch, and where."""
     p = sub.add_parser(
         "download",
-        help="fetch Google 16k YCB scans (CC BY 4.0): NAME..., --protocol CONFIG or --all",
+        help="fetch Google 16k YCB scans (CC BY 4.0): NAME..., --protocol NAME or --all",
         description="Fetch the Google 16k YCB scans from the official YCB source (or HSQ_YCB_URL) "
         "into the download folder (HSQ_DATA_DIR/ycb, default assets/ycb), which hsqbench reads "
         "when HSQ_YCB_DIR is unset; or into --dest DIR, laid out for HSQ_YCB_DIR. Commands that "
         "need missing objects download them by themselves, so this is never required. The "
         "models are CC BY 4.0: ATTRIBUTION.md beside them credits them.",
     )
+    _add_assets_config(p)
     p.add_argument("names", nargs="*", metavar="NAME", help="YCB objects")
-    p.add_argument(
-        "--protocol", metavar="CONFIG", default=None, help="the YCB objects a protocol uses"
-    )
+    add_protocol(p, None, "the YCB objects a protocol uses")
     p.add_argument(
         "--all", action="store_true", help="every object of download.objects in the config"
     )
@@ -102,6 +108,7 @@ def _add_download(sub: argparse._SubParsersAction) -> None:
 def _add_import(sub: argparse._SubParsersAction) -> None:
     """``assets import``: a folder of meshes and how to read them."""
     p = sub.add_parser("import", help="register (and build) a folder of meshes (obj/stl/ply)")
+    _add_assets_config(p)
     p.add_argument(
         "folder",
         type=Path,

@@ -8,9 +8,17 @@ from typing import TYPE_CHECKING, Any
 
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
+    RUN_HELP,
     add_executor,
+    add_experiments,
     add_jobs,
+    add_output,
+    add_planners,
     add_protocol,
+    add_run,
+    add_run_control,
+    add_seeds,
+    deprecated,
     positive_int,
     protocol_of,
 )
@@ -24,64 +32,43 @@ HELP = "run the experiments of a benchmark protocol with its planners (or yours)
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_protocol(parser)
-    parser.add_argument(
-        "--run",
-        default=None,
-        metavar="NAME",
-        help="run name under runs/ (or a folder path); default <protocol>-<UTC time>",
-    )
+    add_run(parser, f"{RUN_HELP}; default <protocol>-<UTC time>")
     add_jobs(parser)
     add_executor(parser)
-    parser.add_argument(
-        "--planners",
-        nargs="+",
-        default=None,
-        metavar="PLANNER",
-        help="run these planners on the protocol's scenes (default: the protocol's own): "
+    add_planners(
+        parser,
+        "run these planners on the protocol's scenes (default: the protocol's own): "
         f"{PLANNER_SPEC_HELP}. One the protocol lacks joins its planner list (a run of its own)",
     )
-    parser.add_argument(
-        "--experiments",
-        nargs="+",
-        choices=("isolated", "packed", "pile"),
-        default=None,
-        help="only these experiments",
+    add_seeds(
+        parser,
+        "base seeds instead of the protocol's (a run of its own; more seeds: more poses, "
+        "narrower intervals)",
     )
-    parser.add_argument(
-        "--resume",
-        action="store_true",
-        help="continue the run --run NAME: finished trials are skipped (a new name starts a run)",
-    )
-    parser.add_argument(
-        "--retry-errors",
-        action="store_true",
-        help="with --resume, run again the trials that failed with an infrastructure error "
-        "(never failed grasps)",
-    )
-    parser.add_argument(
-        "--force",
-        action="store_true",
-        help="move an existing run folder aside (<name>.replaced-<time>) and start again",
+    add_experiments(parser)
+    add_run_control(
+        parser, "continue the run --run RUN: finished trials are skipped (a new name starts a run)"
     )
     _add_until_arguments(parser)
-    parser.add_argument("--no-report", action="store_true", help="do not write tables and plots")
     _add_rerun_arguments(parser)
 
 
 def _add_rerun_arguments(parser: argparse.ArgumentParser) -> None:
-    """--rerun-dir and what it records."""
-    parser.add_argument(
-        "--rerun-dir",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="after the run, record trials for Rerun into DIR (replayed from their seeds)",
+    """--rerun and what it records."""
+    add_output(
+        parser,
+        "rerun",
+        "after the run, record trials for Rerun into DIR, one .rrd each (replayed from their "
+        "seeds)",
+        folder=True,
+        dest="rerun_dir",
     )
+    deprecated(parser, "--rerun-dir", "--rerun", "rerun_dir", type=Path)
     parser.add_argument(
         "--rerun-which",
         choices=("failures", "all"),
         default="failures",
-        help="which trials --rerun-dir records (default: failures)",
+        help="which trials --rerun records (default: failures)",
     )
     parser.add_argument(
         "--rerun-trial",
@@ -113,6 +100,7 @@ def _add_until_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import dataclasses
     import sys
 
     from hsqbench.cli import CommandError
@@ -122,11 +110,13 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.runs import protocol_planners, run_folder
 
     if args.retry_errors and not args.resume:
-        raise CommandError("--retry-errors only applies with --resume --run NAME")
+        raise CommandError("--retry-errors only applies with --resume --run RUN")
     if args.resume and args.run is None:
-        raise CommandError("--resume needs --run NAME (the run to continue)")
+        raise CommandError("--resume needs --run RUN (the run to continue)")
     protocol = args.protocol = protocol_of(args)
     config, planners = protocol_planners(load_experiment_config(protocol), args.planners)
+    if args.seeds is not None:
+        config = dataclasses.replace(config, seeds=tuple(args.seeds))
     run_dir = run_folder(args.run, protocol)
     if args.resume:
         _check_resumed_planners(run_dir, config.planners)
@@ -141,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
             f"\ninterrupted: finished trials are saved in {run_dir}; continue with\n"
             f"  hsqbench benchmark --protocol {protocol} --run {run_dir} --resume"
             + (f" --planners {' '.join(args.planners)}" if args.planners else "")
+            + (f" --seeds {' '.join(map(str, args.seeds))}" if args.seeds is not None else "")
             + (
                 f" --until-halfwidth {args.until_halfwidth} --max-seeds {args.max_seeds}"
                 if args.until_halfwidth is not None

@@ -1,4 +1,4 @@
-"""``hsqbench compare RUN_A RUN_B``: two runs of one protocol, trial by trial.
+"""``hsqbench compare A B``: two runs of one protocol, trial by trial.
 
 Judges a change to a planner, a config or the simulation in one command: per planner, the
 paired difference B - A (isolated GSR over the same poses, packed and pile CR over the same
@@ -14,21 +14,22 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from hsqbench.commands._options import RUN_HELP, add_planners, as_path
+
 HELP = "compare two runs of one protocol trial by trial: paired differences and changed attempts"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("run_a", type=Path, help="the baseline run folder (runs/<run>)")
-    parser.add_argument("run_b", type=Path, help="the run to judge against it")
-    parser.add_argument(
-        "--planners", nargs="+", default=None, metavar="NAME", help="only these planners"
-    )
+    parser.add_argument("run_a", type=as_path, metavar="A", help=f"the baseline run: {RUN_HELP}")
+    parser.add_argument("run_b", type=as_path, metavar="B", help="the run to judge against it")
+    add_planners(parser, "only these planners")
     parser.add_argument(
         "--columns",
+        nargs="+",
         default=None,
-        metavar="A,B,...",
-        help="comma-separated columns that must match for an attempt to count as unchanged "
-        "(default: every column the seeds fix, not timings, workers, hashes or versions)",
+        metavar="COLUMN",
+        help="the columns that must match for an attempt to count as unchanged (default: every "
+        "column the seeds fix, not timings, workers, hashes or versions)",
     )
     parser.add_argument(
         "--part",
@@ -140,7 +141,9 @@ def run(args: argparse.Namespace) -> int:
         if not path.is_dir():
             raise FileNotFoundError(f"{path} is not a folder; give two run folders runs/<run>")
     a, b = load_run(args.run_a), load_run(args.run_b)
-    columns = tuple(c for c in args.columns.split(",") if c) if args.columns else MATCH
+    # Space-separated as every list of this CLI; "a,b" (the old form) is read alike.
+    given = [c for item in args.columns or () for c in item.split(",") if c]
+    columns = tuple(given) or MATCH
     unknown = [c for c in columns if c not in MATCH]
     if unknown:
         raise ValueError(f"--columns {','.join(unknown)}: not compared columns; use of {MATCH}")

@@ -6,7 +6,14 @@ import argparse
 import json
 from pathlib import Path
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, deprecated
+from hsqbench.commands._options import (
+    PLANNER_SPEC_HELP,
+    add_output,
+    add_planner,
+    add_scene,
+    add_seed,
+    deprecated,
+)
 
 HELP = "plan grasps on a point cloud (.ply, .pcd, .npy, .xyz) and print the best ones"
 
@@ -28,13 +35,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = _EPILOG
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
     parser.add_argument("cloud", type=Path, metavar="CLOUD", help="point cloud file, metres")
-    parser.add_argument(
-        "--packed", action="store_true", help="a packed scene: leave the centroid term out"
+    add_scene(
+        parser,
+        "isolated",
+        "the scene the cloud shows: one object, or several (packed, pile: the centroid term is "
+        "left out)",
     )
+    deprecated(parser, "--packed", "--scene packed", "scene", flag="packed")
     parser.add_argument(
         "--top", type=int, default=10, metavar="K", help="grasps to print and write (0: all)"
     )
-    parser.add_argument("--json", type=Path, metavar="OUT", help="write the result as JSON here")
+    add_output(parser, "json", "write the result as JSON here")
     parser.add_argument(
         "--planner-config",
         default=None,
@@ -42,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the planner's config: a name in configs/ or a YAML path (default: its own)",
     )
     deprecated(parser, "--config", "--planner-config", "planner_config")
-    parser.add_argument("--seed", type=int, default=None, metavar="N", help="planner seed")
+    add_seed(parser, "planner seed", default=None)
     parser.add_argument(
         "--support-plane",
         type=float,
@@ -58,9 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar=("X", "Y", "Z"),
         help="a camera centre in the cloud's frame, metres (repeat for each camera)",
     )
-    parser.add_argument(
-        "--planner", default="hsq", metavar="PLANNER", help=f"{PLANNER_SPEC_HELP} (default: hsq)"
-    )
+    add_planner(parser, f"{PLANNER_SPEC_HELP} (default: hsq)", default="hsq")
 
 
 def _table(result, top: int) -> str:
@@ -99,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     planner = get_planner(args.planner, args.planner_config)
     context = PlanningContext(
         support_plane=tuple(args.support_plane) if args.support_plane else None,
-        packed=args.packed,
+        packed=args.scene != "isolated",
         seed=args.seed,
         camera_positions=None if args.camera is None else np.asarray(args.camera, dtype=float),
     )
@@ -123,7 +132,8 @@ def run(args: argparse.Namespace) -> int:
             "n_points": int(points.shape[0]),
             "config": args.planner_config,
             "seed": args.seed,
-            "packed": args.packed,
+            "scene": args.scene,
+            "packed": args.scene != "isolated",
             "support_plane": context.support_plane,
             "camera_positions": args.camera,
             "code_version": code_version(),

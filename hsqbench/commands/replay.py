@@ -1,4 +1,4 @@
-"""``hsqbench replay RUN``: re-execute recorded grasps of a benchmark run without planning, or
+"""``hsqbench replay --run RUN``: re-execute recorded grasps of a benchmark run without planning, or
 (``--replan``) plan them again with the run's planner; either way compare with the record."""
 
 from __future__ import annotations
@@ -6,6 +6,15 @@ from __future__ import annotations
 import argparse
 from collections import Counter
 from pathlib import Path
+
+from hsqbench.commands._options import (
+    RUN_HELP,
+    add_output,
+    add_planner,
+    add_run,
+    add_set,
+    deprecated,
+)
 
 HELP = "replay a run's attempts (recorded grasps, or --replan) and compare with attempts.csv"
 
@@ -18,11 +27,11 @@ recorded seed instead (a change of the planner or the perception shows). Each re
 is printed as `KEY #I: RECORDED -> REPLAYED (detail)`, then the transitions are counted.
 
 Examples:
-  hsqbench replay runs/quick --trial isolated/hsq/s0/mug/000
-  hsqbench replay runs/quick --outcome dropped --limit 5 --set execution.release_height_m=0.01
-  hsqbench replay runs/quick --trial packed/hsq/s0/003 --attempt 2 --rerun round.rrd
-  hsqbench replay runs/quick --replan --detail "not in the bin" --limit 50 --out turned.csv
-  hsqbench replay runs/pile --replan --planner hsq --failed-graspable --limit 20
+  hsqbench replay --run runs/quick --trial isolated/hsq/s0/mug/000
+  hsqbench replay --run runs/quick --outcome dropped --limit 5 --set execution.release_height_m=0.01
+  hsqbench replay --run runs/quick --trial packed/hsq/s0/003 --attempt 2 --rerun round.rrd
+  hsqbench replay --run runs/quick --replan --detail "not in the bin" --limit 50 --csv turned.csv
+  hsqbench replay --run runs/pile --replan --planner hsq --failed-graspable --limit 20
 
 The replay is exact when the executed grasp was the first one motion-planned (ranks_tried 1);
 otherwise the inverse kinematics draws other restarts and a borderline attempt may differ
@@ -37,7 +46,7 @@ input.
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = _EPILOG
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
-    parser.add_argument("run", type=Path, metavar="RUN", help="a benchmark run folder")
+    add_run(parser, f"the benchmark run to replay: {RUN_HELP}", reads=True, positional_alias=True)
     parser.add_argument(
         "--trial",
         action="append",
@@ -59,23 +68,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "recorded grasps)",
     )
     _add_filters(parser)
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="replay with this trial-config value changed, e.g. execution.release_height_m=0.01",
+    add_set(parser, "run's trial config for the replay", "execution.release_height_m=0.01")
+    add_output(
+        parser,
+        "csv",
+        "write every replayed attempt (key, index, recorded, replayed, exact, detail)",
+        dest="out",
     )
-    parser.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        metavar="OUT.csv",
-        help="write every replayed attempt (key, index, recorded, replayed, exact, detail)",
-    )
-    parser.add_argument(
-        "--rerun", type=Path, default=None, metavar="OUT.rrd", help="record the replay (one trial)"
-    )
+    deprecated(parser, "--out", "--csv", "out", type=Path)
+    add_output(parser, "rerun", "record the replay (one trial) into this .rrd file")
 
 
 def _add_filters(parser: argparse.ArgumentParser) -> None:
@@ -86,9 +87,7 @@ def _add_filters(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="without --trial: trials with an attempt of this outcome, e.g. dropped",
     )
-    parser.add_argument(
-        "--planner", default="", metavar="NAME", help="without --trial: trials of this planner"
-    )
+    add_planner(parser, "without --trial: trials of this planner", default="")
     parser.add_argument(
         "--detail",
         default="",
@@ -156,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
     if args.limit < 1:
         raise CommandError(f"--limit must be >= 1, got {args.limit}")
     if args.out is not None and not args.out.parent.is_dir():
-        raise CommandError(f"--out {args.out}: folder {args.out.parent} does not exist")
+        raise CommandError(f"--csv {args.out}: folder {args.out.parent} does not exist")
     rows = run_rows(args.run)
     config = run_trial_config(args.run, _overrides(args.set))
     keys = _chosen_keys(args, rows)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hsqbench.commands._options import SCENES, add_scene, deprecated
+from hsqbench.commands._options import SCENES, add_output, add_scene, add_seed, deprecated
 from hsqbench.names import check_objects
 
 HELP = "build an isolated, packed or pile scene, print what it holds, render it to a PNG or export it as MJCF"
@@ -18,7 +18,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "packed: objects standing apart; pile: dropped into a box, the box removed",
     )
     deprecated(parser, "--kind", "--scene", "scene", choices=SCENES)
-    parser.add_argument("--seed", type=int, default=0, help="the same seed gives the same scene")
+    add_seed(parser, "the same seed gives the same scene (default 0)")
     parser.add_argument(
         "--objects",
         nargs="+",
@@ -26,17 +26,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="object names (default: drawn by seed from the 15 YCB objects)",
     )
-    parser.add_argument(
-        "--png", type=Path, default=None, metavar="OUT.png", help="write a picture here"
-    )
-    parser.add_argument(
-        "--xml",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="write the scene as self-contained MJCF: DIR/scene.xml (settled state as keyframe "
+    add_output(parser, "png", "write a picture here")
+    add_output(
+        parser,
+        "mjcf",
+        "write the scene as self-contained MJCF: DIR/scene.xml (settled state as keyframe "
         "'initial') and DIR/assets/; open with `python -m mujoco.viewer --mjcf DIR/scene.xml`",
+        folder=True,
+        dest="xml",
     )
+    deprecated(parser, "--xml", "--mjcf", "xml", type=Path)
     parser.add_argument(
         "--camera",
         default=None,

@@ -10,7 +10,20 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from hsqbench.experiment.sweep_config import SweepConfig
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, add_executor, add_jobs, positive_int
+from hsqbench.commands._options import (
+    PLANNER_SPEC_HELP,
+    RUN_HELP,
+    add_executor,
+    add_experiments,
+    add_jobs,
+    add_planners,
+    add_protocols,
+    add_run,
+    add_run_control,
+    add_seeds,
+    deprecated,
+    positive_int,
+)
 
 HELP = (
     "robustness sweeps: run a protocol at each value of config parameters (depth noise, "
@@ -34,7 +47,7 @@ def _add_sweeps(parser: argparse.ArgumentParser) -> None:
         "pad_friction) or YAML paths; or use --param and --values",
     )
     parser.add_argument(
-        "--param", metavar="PATH", help="an ad hoc sweep: this config path, e.g. "
+        "--param", metavar="KEY", help="an ad hoc sweep: this config key, e.g. "
         "perception.tof.sigma_quad_per_m, robot.pads.friction.0, scene.depth_cameras.names",
     )  # fmt: skip
     parser.add_argument(
@@ -43,20 +56,16 @@ def _add_sweeps(parser: argparse.ArgumentParser) -> None:
         metavar="VALUE",
         help="with --param: its values, each read as YAML (0.002, true, [cam_left])",
     )
-    parser.add_argument(
-        "--protocol",
-        nargs="+",
-        default=None,
-        metavar="CONFIG",
-        help="with --param: the protocol(s) (default paper); with sweep configs: run only these of "
+    add_protocols(
+        parser,
+        "with --param: the protocols (default paper); with sweep configs: run only these of "
         "their protocols (e.g. ycb), keeping the others' recorded runs",
     )
-    parser.add_argument(
-        "--experiments",
-        nargs="+",
+    add_experiments(
+        parser,
+        "with --param: the experiments (default isolated)",
+        ["isolated"],
         choices=("isolated", "packed"),
-        default=["isolated"],
-        help="with --param: the experiments (default isolated)",
     )
 
 
@@ -69,45 +78,27 @@ def _add_scope(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="isolated attempts per object and seed at every point (overrides the sweep's)",
     )
-    parser.add_argument(
-        "--planners",
-        nargs="+",
-        default=None,
-        metavar="PLANNER",
-        help="run only these planners (the sweep's others can be added later to the same runs); "
+    add_planners(
+        parser,
+        "run only these planners (the sweep's others can be added later to the same runs); "
         f"{PLANNER_SPEC_HELP}, which joins the sweep's list (new runs)",
     )
-    parser.add_argument(
-        "--seeds",
-        nargs="+",
-        type=int,
-        default=None,
-        metavar="SEED",
-        help="base seeds (overrides the sweep's; more seeds: more poses, narrower bands)",
-    )
+    add_seeds(parser, "base seeds (overrides the sweep's; more seeds: more poses, narrower bands)")
     parser.add_argument(
         "--only", nargs="+", default=None, metavar="PARAM", help="run only these parameters"
     )
-    parser.add_argument(
-        "--run",
-        default="sweeps",
-        metavar="NAME",
-        help="sweep folder under runs/ or a path (default runs/sweeps); rerunning resumes",
-    )
+    add_run(parser, f"the sweep folder: {RUN_HELP} (default runs/sweeps)", default="sweeps")
 
 
 def _add_execution(parser: argparse.ArgumentParser) -> None:
-    """How the sweep runs: workers, executor, errors, report only."""
+    """How the sweep runs: workers, executor, what is there already, report."""
     add_jobs(parser)
     add_executor(parser)
-    parser.add_argument(
-        "--retry-errors", action="store_true", help="run again trials recorded as errors"
+    add_run_control(
+        parser,
+        "continue the sweep folder --run RUN, or add sweeps to it: finished points are reused",
     )
-    parser.add_argument(
-        "--report-only",
-        action="store_true",
-        help="only rewrite sweep.csv, sweep.md and the plots from the runs already in the folder",
-    )
+    deprecated(parser, "--report-only", "hsqbench report --run RUN", "report_only", flag=True)
 
 
 def _sweeps(args: argparse.Namespace) -> list:
@@ -148,7 +139,7 @@ def _sweeps(args: argparse.Namespace) -> list:
             names = [p.name for p in sweep.protocols]
             if unknown := [p for p in args.protocol if p not in names]:
                 raise CommandError(
-                    f"--protocol {' '.join(unknown)}: not a protocol of sweep "
+                    f"--protocols {' '.join(unknown)}: not a protocol of sweep "
                     f"'{sweep.parameters[0].name}'; its protocols: {', '.join(names)}"
                 )
             sweep = replace(
@@ -182,24 +173,45 @@ def run_planners(args: argparse.Namespace, sweep: SweepConfig) -> tuple[str, ...
     return tuple(runnable(args.planners or sweep.planners))
 
 
+def _existing_sweep(root: Path, args: argparse.Namespace) -> None:
+    """As ``benchmark`` treats a run folder: a sweep folder that holds a sweep is continued
+    only with ``--resume`` (its points' runs are named by their settings, so any sweep can be
+    added to it), moved aside with ``--force``, and otherwise an error."""
+    from hsqbench.cli import CommandError
+    from hsqbench.experiment.runner import move_aside
+
+    if args.retry_errors and not args.resume:
+        raise CommandError("--retry-errors only applies with --resume")
+    if not (root / "sweep.json").is_file() or args.resume:
+        return
+    if args.force:
+        print(f"moved the previous sweep folder to {move_aside(root)}", file=sys.stderr)
+        return
+    raise CommandError(
+        f"{root} already holds a sweep: pass --resume to continue it or add to it (finished "
+        "points are reused), choose another --run, or --force to move it aside"
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     from hsqbench.cli import CommandError
     from hsqbench.experiment.backend import TrialRunnerUnavailable
     from hsqbench.experiment.executor import make_executor
-    from hsqbench.experiment.sweep import run_sweep, write_sweep_report
+    from hsqbench.experiment.sweep import run_sweep
     from hsqbench.settings import RESULTS_DIR
 
     root = Path(args.run) if "/" in args.run else RESULTS_DIR / args.run
-    if args.report_only:
-        written = write_sweep_report(root)
-        plots = sum(p.suffix == ".png" for p in written)
-        print(f"sweep report: {written[0]}, {written[1].name} and {plots} plots")
+    if args.report_only:  # the deprecated spelling of `hsqbench report --run RUN`
+        from hsqbench.commands.report import report_sweep
+
+        report_sweep(root)
         return 0
     if args.planners:  # names, or plugin specs registered here (and in the workers)
         from hsqbench.planner.registry import resolve_planners
 
         args.planners = resolve_planners(args.planners)
     sweeps = _sweeps(args)
+    _existing_sweep(root, args)
     executor = make_executor(args.executor, args.jobs, args.address)
     errors = 0
     try:
@@ -211,20 +223,23 @@ def run(args: argparse.Namespace) -> int:
                 planners=run_planners(args, sweep),
                 only=args.only,
                 retry_errors=args.retry_errors,
+                report=not args.no_report,
             )
             errors += summary.errors
     except TrialRunnerUnavailable as exc:
         raise CommandError(f"cannot run the sweep: {exc}") from exc
     except KeyboardInterrupt:
         print(
-            f"\ninterrupted: finished trials are saved under {root}; the same command resumes",
+            f"\ninterrupted: finished trials are saved under {root}; the same command with "
+            "--resume continues",
             file=sys.stderr,
         )
         return 130
     print(f"sweep: {root / 'sweep.csv'} and one PNG per parameter in {root}")
     if errors:
         print(
-            f"{errors} trial(s) failed with an infrastructure error; rerun with --retry-errors",
+            f"{errors} trial(s) failed with an infrastructure error; rerun with --resume "
+            "--retry-errors",
             file=sys.stderr,
         )
         return 1

@@ -6,7 +6,15 @@ import argparse
 import json
 from pathlib import Path
 
-from hsqbench.commands._options import PLANNER_SPEC_HELP, add_scene, deprecated
+from hsqbench.commands._options import (
+    PLANNER_SPEC_HELP,
+    add_output,
+    add_planner,
+    add_scene,
+    add_seed,
+    add_set,
+    deprecated,
+)
 from hsqbench.names import check_objects
 
 HELP = "run one grasp trial (isolated object) or one packed round in the simulator"
@@ -30,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--object", default=None, metavar="NAME", help="object of an isolated trial"
     )
-    parser.add_argument("--seed", type=int, default=0, metavar="N", help="the trial's seed")
+    add_seed(parser, "the trial's seed (default 0)")
     add_scene(parser, "isolated", "kind of trial: one object, or a packed or pile round")
     parser.add_argument(
         "--objects",
@@ -39,9 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="objects of a packed round (default: drawn by the seed)",
     )
-    parser.add_argument(
-        "--planner", default="hsq", metavar="PLANNER", help=f"{PLANNER_SPEC_HELP} (default: hsq)"
-    )
+    add_planner(parser, f"{PLANNER_SPEC_HELP} (default: hsq)", default="hsq")
     parser.add_argument(
         "--trial-config",
         default=None,
@@ -49,16 +55,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="trial config: a name in configs/ or a YAML path (default: trial)",
     )
     deprecated(parser, "--config", "--trial-config", "trial_config")
+    add_set(parser, "trial config", "execution.lift_height_m=0.15")
     parser.add_argument(
         "--sensor",
         choices=("cameras", "surface"),
         default=None,
         help="override the config's sensor (surface: fast stand-in without rendering)",
     )
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result")
-    parser.add_argument(
-        "--rerun", type=Path, default=None, metavar="OUT.rrd", help="record the episode for Rerun"
-    )
+    add_output(parser, "json", "write the result as JSON here")
+    add_output(parser, "rerun", "record the episode for Rerun into this .rrd file")
 
 
 def _check_names(args: argparse.Namespace) -> None:
@@ -106,10 +111,11 @@ def _line(i: int, a) -> str:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
+    from hsqbench.overrides import parse_assignments
     from hsqbench.sim.trial import load_trial_config, run_isolated_trial, run_packed_round
 
     _check_names(args)
-    config = load_trial_config(args.trial_config or "trial")
+    config = load_trial_config(args.trial_config or "trial", parse_assignments(args.set))
     if args.sensor is not None:
         config = replace(config, sensor=args.sensor)
     recorder = _recorder(args.rerun)

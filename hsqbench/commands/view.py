@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from hsqbench.commands._options import deprecated
+
 HELP = "open a recorded episode (.rrd from --rerun) in the Rerun viewer"
 
 #: Default ports of ``--web``: the viewer's page (Rerun's usual one) and the recording's server
@@ -34,7 +36,9 @@ Exit status: 0 when the file is a readable recording (viewer started, or instruc
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = _EPILOG
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
-    parser.add_argument("path", type=Path, metavar="OUT.rrd", help="a recording from --rerun")
+    parser.add_argument(
+        "path", type=Path, metavar="RECORDING", help="a .rrd recording (from --rerun PATH)"
+    )
     parser.add_argument(
         "--web",
         action="store_true",
@@ -54,9 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help=f"HTTP port that serves the recording to the page (default {RRD_PORT}; 0: a free one)",
     )
-    parser.add_argument(
-        "--port", type=int, default=None, help=argparse.SUPPRESS
-    )  # the old name of --web-port, kept for one release
+    deprecated(parser, "--port", "--web-port", "web_port", type=int)
 
 
 def has_display(environ: dict[str, str] | None = None, platform: str | None = None) -> bool:
@@ -102,9 +104,6 @@ def _describe(summary) -> list[str]:
 
 
 def _ports(args: argparse.Namespace) -> tuple[int, int]:
-    if args.port is not None:
-        print("note: --port is now --web-port (the old name goes in the next release)")
-        args.web_port = args.port
     for name in ("web_port", "rrd_port"):
         port = getattr(args, name)
         if not 0 <= port <= 65535:

@@ -180,7 +180,7 @@ def make_results(
         from hsqbench.cli import main as cli_main
 
         argv = ["sweep", *canon.sweeps.parameters, "--run", str(out / canon.sweeps.name)]
-        argv += ["--retry-errors", *(["--protocol", protocol] if protocol else [])]
+        argv += ["--resume", "--retry-errors", *(["--protocols", protocol] if protocol else [])]
         print(f"== {out / canon.sweeps.name}: about {canon.sweeps.expected_min:.0f} min")
         errors += cli_main([*argv, *(["--jobs", str(jobs)] if jobs else [])]) != 0
     return errors

@@ -59,7 +59,8 @@ def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
 
-def _move_aside(run_dir: Path) -> Path:
+def move_aside(run_dir: Path) -> Path:
+    """Rename ``run_dir`` to ``<name>.replaced-<UTC time>`` (``--force``); the new path."""
     stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
     target = run_dir.with_name(f"{run_dir.name}.replaced-{stamp}")
     run_dir.rename(target)
@@ -308,7 +309,7 @@ def _existing_run(
         )
     has_data = meta is not None or plain.exists()
     if has_data and force:
-        moved = _move_aside(run_dir)
+        moved = move_aside(run_dir)
         print(f"moved the previous run to {moved}", file=sys.stderr)
         return None
     if has_data and not resume:
