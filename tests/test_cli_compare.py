@@ -66,7 +66,7 @@ def test_a_changed_copy_of_a_committed_run_prints_its_transitions(
 ) -> None:
     better = tmp_path / "better"
     assert _copy_flipping(hsq_run, better, "hsq", 20, "no_grasp_found", "success") == 20
-    assert main(["compare", str(hsq_run), str(better), "--fail-if-worse", "--show", "3"]) == 0
+    assert main(["compare", str(hsq_run), str(better), "--fail-if-worse", "--limit", "3"]) == 0
     out = capsys.readouterr().out
     assert "paired difference B - A" in out
     iso = next(x for x in out.splitlines() if x.strip().startswith("isolated GSR  hsq"))

@@ -99,7 +99,7 @@ def deprecated(
 def deprecated_aliases(parser: argparse.ArgumentParser) -> dict[str, str]:
     """``{old spelling: new spelling}`` of one parser (for docs/cli.md's test)."""
     return {
-        (a.option_strings[0] if a.option_strings else f"positional {a.metavar}"): a.new
+        (a.option_strings[0] if a.option_strings else a.metavar): a.new
         for a in parser._actions
         if isinstance(a, _Deprecated | _DeprecatedPositional)
     }
@@ -270,7 +270,13 @@ def add_seeds(parser: argparse.ArgumentParser, help_text: str) -> None:
 
 
 def add_scene(parser: argparse.ArgumentParser, default: str, help_text: str) -> None:
-    parser.add_argument("--scene", choices=SCENES, default=default, help=help_text)
+    parser.add_argument(
+        "--scene",
+        choices=SCENES,
+        default=default,
+        metavar="KIND",
+        help=f"{help_text} ({', '.join(SCENES)}; default {default})",
+    )
 
 
 def add_experiments(
@@ -280,7 +286,12 @@ def add_experiments(
     choices: Sequence[str] = SCENES,
 ) -> None:
     parser.add_argument(
-        "--experiments", nargs="+", choices=choices, default=default, help=help_text
+        "--experiments",
+        nargs="+",
+        choices=choices,
+        default=default,
+        metavar="KIND",
+        help=f"{help_text} (of {', '.join(choices)})",
     )
 
 

@@ -94,10 +94,14 @@ def _add_download(sub: argparse._SubParsersAction) -> None:
         "--dest",
         type=Path,
         default=None,
+        metavar="DIR",
         help="folder to write, then export HSQ_YCB_DIR=DEST (default: the download folder)",
     )
     p.add_argument(
-        "--base-url", default=None, help="archive server (default: download.base_url in the config)"
+        "--base-url",
+        default=None,
+        metavar="URL",
+        help="archive server (default: download.base_url in the config)",
     )
     p.add_argument("--force", action="store_true", help="download again objects already present")
     p.add_argument(
@@ -116,12 +120,17 @@ def _add_import(sub: argparse._SubParsersAction) -> None:
         help="a folder of .obj, .stl or .ply meshes (searched recursively), one object each",
     )
     p.add_argument(
-        "--density", type=float, default=None, help="kg/m^3 (default: importer.density_kg_m3)"
+        "--density",
+        type=float,
+        default=None,
+        metavar="KG_M3",
+        help="kg/m^3 (default: importer.density_kg_m3)",
     )
     p.add_argument(
         "--scale",
         type=float,
         default=1.0,
+        metavar="FACTOR",
         help="multiplies coordinates to get metres (0.001 for mm)",
     )
     p.add_argument(
@@ -130,7 +139,7 @@ def _add_import(sub: argparse._SubParsersAction) -> None:
         default="z",
         help="file axis that points up; 'stable': most probable resting pose (default: z)",
     )
-    p.add_argument("--prefix", default="", help="prepended to every object name")
+    p.add_argument("--prefix", default="", metavar="TEXT", help="prepended to every object name")
     p.add_argument("--no-build", action="store_true", help="only register the meshes")
     add_jobs(p, "objects built at once", "assets config's jobs")
 

@@ -60,7 +60,6 @@ def _add_rerun_arguments(parser: argparse.ArgumentParser) -> None:
         "rerun",
         "after the run, record trials for Rerun into DIR, one .rrd each (replayed from their "
         "seeds)",
-        folder=True,
         dest="rerun_dir",
     )
     deprecated(parser, "--rerun-dir", "--rerun", "rerun_dir", type=Path)

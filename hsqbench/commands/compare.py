@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from hsqbench.commands._options import RUN_HELP, add_planners, as_path
+from hsqbench.commands._options import RUN_HELP, add_planners, as_path, deprecated
 
 HELP = "compare two runs of one protocol trial by trial: paired differences and changed attempts"
 
@@ -38,8 +38,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "to check that this code still gives a committed run): A's other trials are left out",
     )
     parser.add_argument(
-        "--show", type=int, default=50, metavar="N", help="changed attempts listed (default 50)"
+        "--limit",
+        dest="show",
+        type=int,
+        default=50,
+        metavar="N",
+        help="at most this many changed attempts listed (default 50)",
     )
+    deprecated(parser, "--show", "--limit", "show", type=int, default=50)
     parser.add_argument(
         "--fail-if-worse",
         action="store_true",

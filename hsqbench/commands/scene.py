@@ -37,10 +37,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     deprecated(parser, "--xml", "--mjcf", "xml", type=Path)
     parser.add_argument(
-        "--camera",
+        "--png-camera",
+        dest="camera",
         default=None,
-        help="camera to render (default: the viewer camera; cam_left/cam_right show the depth views)",
+        metavar="NAME",
+        help="the camera --png renders from (default: the viewer camera; cam_left/cam_right "
+        "show the depth views)",
     )
+    deprecated(parser, "--camera", "--png-camera", "camera")
 
 
 def render_png(model, data, camera: str, path: Path) -> None:
