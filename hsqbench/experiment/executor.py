@@ -30,6 +30,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from hsqbench.experiment import lifeline
 from hsqbench.experiment.backend import (
     TrialBackend,
     TrialRun,
@@ -66,6 +67,8 @@ class SerialExecutor:
 
 
 def _mp_context() -> multiprocessing.context.BaseContext:
+    # The fork server (and any child importing lifeline) ends with this process: see lifeline.
+    os.environ[lifeline.PARENT_ENV] = str(os.getpid())
     # Not fork: the parent runs a progress thread, and forking a threaded process can deadlock.
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
@@ -74,6 +77,7 @@ def _mp_context() -> multiprocessing.context.BaseContext:
     # heavy imports (scikit-learn, SciPy): cheap fresh pools.
     ctx.set_forkserver_preload(
         [
+            "hsqbench.experiment.lifeline",
             "hsqbench.experiment.backend",
             "hsqbench.sim.trial",
             "hsqbench.planner.hsq.stage_one.recovery",
@@ -133,7 +137,12 @@ class LocalExecutor:
     ) -> Iterator[TrialRun]:
         """Run ``groups`` (one presentation each) in one pool; groups lost to a broken pool
         are appended to ``broken``."""
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(groups)), mp_context=_mp_context())
+        pool = ProcessPoolExecutor(
+            max_workers=min(workers, len(groups)),
+            mp_context=_mp_context(),
+            initializer=lifeline.exit_with,  # a worker ends with this process, even a killed one
+            initargs=(os.getpid(),),
+        )
         clean = False
         try:
             with _main_not_reimported():  # the workers start as groups are submitted
