@@ -15,6 +15,7 @@ from hsqbench.settings import CONFIG_DIR
 CLASSES = {
     "assets": "hsqbench.assets.config:AssetsConfig",
     "baselines": "hsqbench.planner.baselines.config:BaselinesConfig",
+    "clutter": "hsqbench.sim.clutter.config:ClutterConfig",
     "contact_graspnet": "hsqbench.planner.learned.config:ContactGraspNetConfig",
     "gripper": "hsqbench.planner.gripper:GripperModel",
     "hold": "tests.hold_rig:HoldConfig",
@@ -32,7 +33,14 @@ CLASSES = {
 #: canonical runs (hsqbench.experiment.canonical, tested in its own test). The protocols
 #: (configs/protocols/, whose object lists and sizes are the experiment itself) are tested in
 #: tests/test_experiment_config.py.
-NOT_DEFAULTS = {"canonical", "scene_resting", "trial_resting"}
+NOT_DEFAULTS = {
+    "canonical",
+    "clutter_ring",
+    "scene_resting",
+    "trial_clutter",
+    "trial_clutter_ring",
+    "trial_resting",
+}
 
 
 def _class(spec: str):

@@ -3,7 +3,10 @@
 VGN (Breyer et al. 2020) and GIGA (Jiang et al. 2021) end a clutter-removal round when the table
 is clear, after two consecutive failed grasps, or at the first step where the planner finds no
 grasp; that step is not a grasp attempt. They report GSR = successful grasps / grasps executed
-and the declutter rate DR = successful grasps / objects presented (VGN's ``percent_cleared``).
+and the declutter rate DR = successful grasps / objects presented (GIGA's
+``clutter_removal.run``). VGN's own ``percent_cleared`` (its ``clutter_removal.Data``) is the
+same ratio over the rounds with at least one grasp executed only (it joins the rounds to their
+logged grasps, so a round that ends before its first grasp leaves its objects out).
 
 Our rounds (:mod:`hsqbench.sim.stop_rule`) share the first two rules but count "no grasp found"
 as a failed attempt and go on. Up to the first such attempt a round is the same under both rules
@@ -54,7 +57,7 @@ def clutter_table(data: RunData) -> pd.DataFrame:
             mine = done[done["planner"] == p]
             if mine.empty:
                 continue
-            k = n = cut = cleared = presented = ours_k = ours_n = 0
+            k = n = cut = cleared = presented = ours_k = ours_n = pc_n = 0
             for key, n_objects, n_cleared in zip(
                 mine["trial_key"], mine["n_objects"], mine["n_cleared"], strict=True
             ):
@@ -63,6 +66,7 @@ def clutter_table(data: RunData) -> pd.DataFrame:
                 wins = [] if g is None else list(g["success"].to_numpy(dtype=float) > 0)
                 rk, rn, rcut = vgn_round(outcomes, wins)
                 k, n, cut = k + rk, n + rn, cut + rcut
+                pc_n += int(n_objects) if rn else 0  # VGN's percent_cleared: rounds with a grasp
                 ours_k, ours_n = ours_k + sum(wins), ours_n + len(wins)
                 cleared, presented = cleared + int(n_cleared), presented + int(n_objects)
             gsr = Rate.of(k, n, data.confidence) if n else None
@@ -82,6 +86,7 @@ def clutter_table(data: RunData) -> pd.DataFrame:
                     "declutter_low_percent": 100 * dr.low,
                     "declutter_high_percent": 100 * dr.high,
                     "objects_presented": presented,
+                    "vgn_percent_cleared": 100 * k / pc_n if pc_n else np.nan,
                     "our_gsr_percent": 100 * ours_k / ours_n if ours_n else np.nan,
                     "our_cr_percent": 100 * cleared / presented,
                 }
@@ -99,12 +104,13 @@ def render_clutter(data: RunData, table: pd.DataFrame) -> list[str]:
         "",
         "The same rounds, counted as VGN and GIGA count theirs: a round also ends at the first "
         "attempt without a grasp, which is not an attempt; declutter rate = successful grasps / "
-        "objects presented. Set these beside their papers' GSR and DR, not ours. Rounds cut: "
-        "rounds that end earlier under their rule.",
+        "objects presented (GIGA); VGN's % cleared leaves out rounds without any grasp. Set these "
+        "beside their papers' GSR and DR, not ours. Rounds cut: rounds that end earlier under "
+        "their rule.",
         "",
     ]
     heads = ["experiment", "planner", "GSR (VGN rule)", f"{conf} CI", "k/n", "declutter rate",
-             f"{conf} CI", "our GSR", "our CR", "rounds cut"]  # fmt: skip
+             f"{conf} CI", "VGN % cleared", "our GSR", "our CR", "rounds cut"]  # fmt: skip
     out += ["| " + " | ".join(heads) + " |", "|" + "|".join(" --- " for _ in heads) + "|"]
     for _, r in table.iterrows():
         gsr_ok = np.isfinite(r["vgn_gsr_percent"])
@@ -116,6 +122,7 @@ def render_clutter(data: RunData, table: pd.DataFrame) -> list[str]:
             f"{int(r['vgn_successes'])}/{int(r['vgn_attempts'])}",
             f"{r['declutter_percent']:.1f}",
             f"[{r['declutter_low_percent']:.1f}, {r['declutter_high_percent']:.1f}]",
+            f"{r['vgn_percent_cleared']:.1f}" if np.isfinite(r["vgn_percent_cleared"]) else "—",
             f"{r['our_gsr_percent']:.1f}" if np.isfinite(r["our_gsr_percent"]) else "—",
             f"{r['our_cr_percent']:.1f}",
             f"{int(r['rounds_cut'])}/{int(r['rounds'])}",

@@ -236,7 +236,9 @@ def rows_for(
             "n_attempts": len(result.attempts),
             "n_success": sum(a.success for a in result.attempts),
             "status": STATUS_OK,
-            "detail": spec.draw_note,
+            "detail": "; ".join(
+                filter(None, (spec.draw_note, _unplaced_note(result.objects_unplaced)))
+            ),
         }
     else:
         round_row = {
@@ -247,3 +249,8 @@ def rows_for(
             "detail": "; ".join(filter(None, (run.error or "unknown error", spec.draw_note))),
         }
     return attempt_rows, schema.format_row(schema.ROUNDS, round_row)
+
+
+def _unplaced_note(names: list[str]) -> str:
+    """The round detail's note on drawn objects its scene did not place (not presented)."""
+    return f"not placed (not presented): {';'.join(names)}" if names else ""

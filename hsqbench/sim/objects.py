@@ -79,6 +79,7 @@ def add_object_body(
     quat: np.ndarray,
     contact: ContactConfig,
     mass_scale: float = 1.0,
+    size_scale: float = 1.0,
 ) -> mujoco.MjsBody:
     """Add ``obj`` as a free body named ``body_name`` at (pos, quat) under ``parent``.
 
@@ -86,7 +87,11 @@ def add_object_body(
     ``contact`` parameters; the visual mesh is a non-colliding group-2 geom with the texture
     when there is one. Asset names are prefixed with ``body_name`` so objects never clash.
     ``mass_scale`` multiplies the mass and the inertia (the same shape, denser or lighter).
+    ``size_scale`` scales the object about its frame's origin (the base centre): meshes and
+    centre of mass by ``s``, mass by ``s^3`` (the same density) and inertia by ``s^5``.
     """
+    if not size_scale > 0:
+        raise ValueError(f"{obj.name}: size_scale must be positive, got {size_scale}")
     if obj.mass_kg <= 0 or not np.isfinite(obj.mass_kg):
         raise ValueError(f"{obj.name}: mass must be positive, got {obj.mass_kg}")
     if not obj.collision_meshes:
@@ -96,13 +101,14 @@ def add_object_body(
     body.add_freejoint(name=f"{body_name}/free")
     body.explicitinertial = True
     # A mass scale keeps the density distribution: the inertia scales with the mass.
-    body.mass = float(obj.mass_kg) * mass_scale
-    body.ipos = list(map(float, obj.com))
-    body.inertia = list(map(float, moments * mass_scale))
+    s = float(size_scale)
+    body.mass = float(obj.mass_kg) * mass_scale * s**3
+    body.ipos = list(map(float, np.asarray(obj.com) * s))
+    body.inertia = list(map(float, moments * mass_scale * s**5))
     body.iquat = list(map(float, iquat))
     for i, path in enumerate(obj.collision_meshes):
         mesh_name = f"{body_name}/hull{i}"
-        spec.add_mesh(name=mesh_name, file=str(path))
+        spec.add_mesh(name=mesh_name, file=str(path), scale=[s, s, s])
         geom = body.add_geom(
             name=mesh_name,
             type=mujoco.mjtGeom.mjGEOM_MESH,
@@ -112,7 +118,7 @@ def add_object_body(
         )
         contact.apply(geom)
     visual = f"{body_name}/visual"
-    spec.add_mesh(name=visual, file=str(obj.visual_mesh))
+    spec.add_mesh(name=visual, file=str(obj.visual_mesh), scale=[s, s, s])
     vis = body.add_geom(
         name=visual,
         type=mujoco.mjtGeom.mjGEOM_MESH,

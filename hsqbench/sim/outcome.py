@@ -142,6 +142,10 @@ class RoundResult:
     fallen off the table, or pushed or dropped out of the cameras' view; or still on the hand
     once it is back home).
     ``scene_settle_s``, ``scene_max_speed``: as :class:`TrialResult`'s, for the round's scene.
+    ``objects_unplaced``: objects of the round's draw that its scene generation did not put on
+    the table (VGN/GIGA's packed scenes place what fits in 12 tries, and their generation takes
+    out what falls outside the workspace): never presented, so not in ``objects``, the count
+    that rates divide by. Empty for the harness's own scenes, which place every object.
     """
 
     objects: list[str]
@@ -153,6 +157,7 @@ class RoundResult:
     objects_lost: list[str] = field(default_factory=list)
     scene_settle_s: float = float("nan")
     scene_max_speed: float = float("nan")
+    objects_unplaced: list[str] = field(default_factory=list)
 
     @property
     def objects_presented(self) -> int:
@@ -172,6 +177,7 @@ class RoundResult:
             "objects_cleared": list(self.objects_cleared),
             "objects_graspable": self.objects_graspable,
             "objects_lost": list(self.objects_lost),
+            "objects_unplaced": list(self.objects_unplaced),
             "scene_settle_s": self.scene_settle_s,
             "scene_max_speed": self.scene_max_speed,
             "attempts": [a.to_dict() for a in self.attempts],

@@ -72,7 +72,7 @@ from hsqbench.sim.perception_config import (
     SensorModel,
     load_perception_config,
 )
-from hsqbench.sim.sensor_noise import apply_tof_noise, calibration_errors
+from hsqbench.sim.sensor_noise import apply_dex_noise, apply_tof_noise, calibration_errors
 from hsqbench.sim.table_crop import (
     fit_plane,
     fuse_and_downsample,
@@ -356,6 +356,8 @@ class Perception:
             roi = box_roi(pose, cam.K, cam.width_px, cam.height_px, box_lo, box_hi, ROI_PAD_PX)
             v0, v1, u0, u1 = roi
             K_roi = crop_intrinsics(cam.K, v0, u0)
+            if cfg.dex_on:  # whole-image noise (one factor and one warp per image)
+                full = apply_dex_noise(full, cfg.dex, rng)
             depth = full[v0:v1, u0:u1]
             if cfg.tof_on:
                 depth = apply_tof_noise(depth, K_roi, cfg.tof, rng).depth_m

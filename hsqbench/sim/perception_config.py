@@ -14,10 +14,12 @@ from typing import Literal
 import mujoco
 
 from hsqbench.config import load_config
-from hsqbench.sim.sensor_noise import CalibrationErrorConfig, TofNoiseConfig
+from hsqbench.sim.sensor_noise import CalibrationErrorConfig, DexNoiseConfig, TofNoiseConfig
 
-SensorModel = Literal["none", "tof", "calibration", "tof+calibration"]
-SENSOR_MODELS: tuple[str, ...] = ("none", "tof", "calibration", "tof+calibration")
+SensorModel = Literal["none", "tof", "calibration", "tof+calibration", "dex"]
+#: ``dex``: VGN/GIGA's depth noise (:func:`hsqbench.sim.sensor_noise.apply_dex_noise`), for
+#: their clutter-removal protocol (:mod:`hsqbench.sim.clutter`).
+SENSOR_MODELS: tuple[str, ...] = ("none", "tof", "calibration", "tof+calibration", "dex")
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,7 @@ class PerceptionConfig:
     sensor_model: SensorModel = "tof+calibration"
     tof: TofNoiseConfig = field(default_factory=TofNoiseConfig)
     calibration: CalibrationErrorConfig = field(default_factory=CalibrationErrorConfig)
+    dex: DexNoiseConfig = field(default_factory=DexNoiseConfig)
     crop: CropConfig = field(default_factory=CropConfig)
     voxel_m: float = 0.002
     geom_groups: tuple[int, ...] = (0, 1, 2)
@@ -64,6 +67,10 @@ class PerceptionConfig:
     @property
     def tof_on(self) -> bool:
         return "tof" in self.sensor_model
+
+    @property
+    def dex_on(self) -> bool:
+        return self.sensor_model == "dex"
 
     @property
     def calibration_on(self) -> bool:

@@ -192,6 +192,51 @@ def apply_tof_noise(
     return TofNoiseResult(out, edge, flying & keep, dropped)
 
 
+# ---- DexNet-style noise (VGN/GIGA's clutter removal) ------------------------------------------
+
+
+@dataclass(frozen=True)
+class DexNoiseConfig:
+    """GIGA's ``apply_dex_noise`` (``src/vgn/utils/misc.py``; the values are its defaults):
+    the whole image times one gamma-distributed factor (shape ``gamma_shape``, scale
+    ``gamma_scale``: mean 1, sd 3 %), then, with probability ``gp_rate``, Gaussian noise of
+    sd ``gp_sigma_m`` drawn on a grid ``gp_scale`` times coarser than the image and upsampled
+    bilinearly (a smooth random warp of the depth)."""
+
+    gamma_shape: float = 1000.0
+    gamma_scale: float = 0.001
+    gp_sigma_m: float = 0.005
+    gp_scale: float = 4.0
+    gp_rate: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not (self.gamma_shape > 0 and self.gamma_scale > 0 and self.gp_scale >= 1):
+            raise ValueError("dex noise: gamma_shape, gamma_scale > 0 and gp_scale >= 1")
+        if self.gp_sigma_m < 0 or not 0.0 <= self.gp_rate <= 1.0:
+            raise ValueError("dex noise: gp_sigma_m >= 0 and gp_rate in [0, 1]")
+
+
+def apply_dex_noise(
+    depth_m: NDArray[np.floating], config: DexNoiseConfig, rng: np.random.Generator
+) -> NDArray[np.float32]:
+    """The depth image with :class:`DexNoiseConfig`'s noise on its valid (> 0) pixels; invalid
+    pixels stay 0 (theirs adds the warp to them too, where their TSDF ignores it as too near).
+    Always the same draws per image: one gamma, one uniform, one coarse grid."""
+    from scipy.ndimage import zoom
+
+    depth = np.asarray(depth_m, dtype=np.float64)
+    h, w = depth.shape
+    valid = depth > 0
+    out = depth * rng.gamma(config.gamma_shape, config.gamma_scale)
+    warp = rng.uniform() < config.gp_rate
+    gh, gw = int(h / config.gp_scale), int(w / config.gp_scale)
+    grid = rng.standard_normal((gh, gw)) * config.gp_sigma_m
+    if warp:
+        up = zoom(grid, (h / gh, w / gw), order=1, mode="grid-constant", grid_mode=True)
+        out = out + up[:h, :w]
+    return np.where(valid, out, 0.0).astype(np.float32)
+
+
 # ---- calibration error ------------------------------------------------------------------------
 
 

@@ -13,6 +13,7 @@ from hsqbench.config import expand_names, from_dict, load_tree
 from hsqbench.errors import ConfigError
 from hsqbench.planner.configs import PlannerConfigs
 from hsqbench.planner.oracle import OracleConfig
+from hsqbench.sim.clutter.config import ClutterConfig
 from hsqbench.sim.ik import IKConfig
 from hsqbench.sim.judge import JudgeConfig
 from hsqbench.sim.motion import MotionConfig
@@ -145,6 +146,9 @@ class TrialConfig:
             (``Attempt.top_scores``, the ``top_scores`` column).
         ordering, execution, ik, motion, judge: see their classes.
         packed, pile: the stop rules of packed and pile rounds (:mod:`hsqbench.sim.stop_rule`).
+        clutter: VGN/GIGA's clutter-removal protocol (:mod:`hsqbench.sim.clutter`); set, the
+            packed and pile rounds run it (free hand, their scenes and camera, its own stop
+            rule) instead of the arm's, with this tree's robot hand, physics and planners.
     """
 
     scene: SceneConfig = field(default_factory=SceneConfig)
@@ -167,6 +171,7 @@ class TrialConfig:
     judge: JudgeConfig = field(default_factory=JudgeConfig)
     packed: PackedConfig = field(default_factory=PackedConfig)
     pile: PackedConfig = field(default_factory=PackedConfig)
+    clutter: ClutterConfig | None = None
 
     def __post_init__(self) -> None:
         if self.max_ranks < 1:

@@ -89,6 +89,11 @@ def run_isolated_trial(
         traces: if given, the attempt's :class:`AttemptTrace` is appended to it.
     """
     cfg = config if config is not None else load_trial_config()
+    if cfg.clutter is not None:
+        raise ValueError(
+            "the clutter-removal protocol (trial config clutter: set) has packed and pile rounds "
+            "only: disable isolated in the protocol"
+        )
     plan = resolve_planner(planner, cfg)
     with TrialEnv.build("isolated", object, seed, cfg, recorder) as env:
         attempt, trace = run_attempt(env, plan, packed=False)
@@ -130,6 +135,10 @@ def run_packed_round(
     if kind not in ("packed", "pile"):
         raise ValueError(f"a clutter-removal round is packed or pile, got {kind!r}")
     cfg = config if config is not None else load_trial_config()
+    if cfg.clutter is not None:
+        from hsqbench.sim.clutter.round import run_clutter_round
+
+        return run_clutter_round(objects or [], seed, planner, cfg, kind)
     rule = cfg.pile if kind == "pile" else cfg.packed
     plan = resolve_planner(planner, cfg)
     attempts: list[Attempt] = []

@@ -1,0 +1,1 @@
+"""VGN/GIGA's simulated clutter removal in the harness (docs/clutter-removal.md)."""

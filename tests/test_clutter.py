@@ -1,0 +1,163 @@
+"""VGN/GIGA's clutter removal (hsqbench.sim.clutter): the free hand's grasp sequence on a box,
+their camera, their depth noise, and their round rule on sequences counted by hand."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hsqbench.sim.clutter.config import ClutterCameraConfig, ClutterConfig, HandExecutionConfig
+from hsqbench.sim.clutter.execution import execute_hand_grasp, retreat_position
+from hsqbench.sim.clutter.world import camera_eyes, compile_world
+from hsqbench.sim.outcome import Outcome
+from hsqbench.sim.physics import load_physics_config
+from hsqbench.sim.robot import load_robot_config
+from hsqbench.sim.sensor_noise import DexNoiseConfig, apply_dex_noise
+from tests.test_robot import make_box
+
+#: Closing along world x, approach straight down (rotation columns: closing, third, approach).
+DOWN = np.column_stack([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
+CENTRE = np.array([0.15, 0.15])
+
+
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory):
+    """One world with a 4 x 4 x 8 cm, 100 g box (compiled once: the hand's meshes take s)."""
+    folder: Path = tmp_path_factory.mktemp("box")
+    box = make_box(folder, (0.04, 0.04, 0.08), 0.1)
+    world = compile_world([box], [1.0], ClutterConfig(), load_robot_config(), load_physics_config())
+    return world, box
+
+
+def _fresh(compiled, hand: HandExecutionConfig | None = None):
+    """The world with the box upright at rest in the middle and the hand parked."""
+    world, box = compiled
+    world.config = dataclasses.replace(ClutterConfig(), hand=hand or HandExecutionConfig())
+    world.hand.teleport(world.data, np.array(world.config.hand.park_m), np.eye(3))
+    top = world.table_z + 0.002
+    world.bring_in(box.name, np.array([*CENTRE, top]), np.array([1.0, 0.0, 0.0, 0.0]))
+    world.wait_to_rest(1.0)
+    return world, box.name
+
+
+def test_the_hand_grasps_and_lifts_a_box_from_above(compiled) -> None:
+    world, box = _fresh(compiled)
+    grasp = np.array([*CENTRE, world.table_z + 0.05])
+    res = execute_hand_grasp(world, grasp, DOWN)
+    assert res.outcome == Outcome.SUCCESS and res.target == box
+    assert res.width_m == pytest.approx(0.04, abs=0.004)  # measured on the box, then released
+    assert world.in_play == []  # the held object is taken out of the world
+    # 5 cm approach and 10 cm lift at 0.1 m/s, plus the closing.
+    assert 1.5 < res.sim_time_s < 1.5 + world.config.hand.close_time_s + 0.1
+    assert world.hand.tcp_position(world.data)[0] > 4.0  # parked again
+
+
+def test_a_contact_at_the_pregrasp_fails_without_moving(compiled) -> None:
+    world, box = _fresh(compiled)
+    # 3 cm off the box's centre along the closing axis, 1 cm above the table: 5 cm back, one
+    # open finger (4 cm from the TCP) is still inside the 8 cm tall box.
+    res = execute_hand_grasp(world, np.array([0.18, 0.15, world.table_z + 0.01]), DOWN)
+    assert res.outcome == Outcome.COLLISION_ON_APPROACH
+    assert "pre-grasp" in res.detail and res.sim_time_s == 0.0
+    assert world.in_play == [box]
+
+
+def test_closing_on_nothing_is_an_empty_grasp(compiled) -> None:
+    world, box = _fresh(compiled)
+    res = execute_hand_grasp(world, np.array([0.05, 0.05, world.table_z + 0.05]), DOWN)
+    assert res.outcome == Outcome.EMPTY_GRASP and "closed to" in res.detail
+    assert world.in_play == [box]
+
+
+def test_a_contact_on_the_approach_stops_it_and_their_clutter_runs_close_anyway(compiled):
+    # The palm's face lies 3.7 cm behind the TCP (gripper.yaml jaw_length_m): with the goal
+    # 6 cm into the box's top it meets the top 2.3 cm short, the pads around the box.
+    goal = np.array([*CENTRE, 0.0])
+    allowed, _ = _fresh(compiled)
+    goal[2] = allowed.table_z + 0.08 - 0.06
+    res = execute_hand_grasp(allowed, goal, DOWN)
+    assert "approach stopped by a contact 2." in res.detail
+    assert res.outcome == Outcome.SUCCESS  # closed where it stopped: still around the box
+    strict, _ = _fresh(compiled, HandExecutionConfig(allow_contact=False))
+    res = execute_hand_grasp(strict, goal, DOWN)
+    assert res.outcome == Outcome.COLLISION_ON_APPROACH and "approach" in res.detail
+
+
+@pytest.mark.parametrize(
+    ("approach", "expected"),
+    [
+        ([0.0, 0.0, -1.0], [0.0, 0.0, 0.1]),  # from above: back along the approach = up
+        ([1.0, 0.0, 0.0], [0.0, 0.0, 0.1]),  # side grasp (90 deg): straight up, not back
+        ([np.sqrt(0.5), 0.0, -np.sqrt(0.5)], [-0.1 * np.sqrt(0.5), 0.0, 0.1 * np.sqrt(0.5)]),
+        ([np.sin(np.radians(61)), 0.0, -np.cos(np.radians(61))], [0.0, 0.0, 0.1]),  # > 60 deg
+    ],
+)
+def test_the_lift_is_back_along_the_approach_unless_a_side_grasp(approach, expected) -> None:
+    a = np.asarray(approach)
+    closing = np.array([0.0, 1.0, 0.0])
+    rotation = np.column_stack([closing, np.cross(a, closing), a])
+    got = retreat_position(np.zeros(3), rotation, 0.1, 60.0)
+    assert got == pytest.approx(np.asarray(expected), abs=1e-12)
+
+
+def test_their_side_view_sits_on_the_cubes_minus_y_side() -> None:
+    eyes, target = camera_eyes(ClutterCameraConfig(), 0.3)
+    # camera_on_sphere(origin (0.15, 0.15, 0.1), r 0.6, theta pi/3, phi -pi/2)
+    assert target == pytest.approx([0.15, 0.15, 0.1])
+    assert eyes[0] == pytest.approx([0.15, 0.15 - 0.6 * np.sin(np.pi / 3), 0.1 + 0.3])
+    assert len(eyes) == 1
+    ring, _ = camera_eyes(ClutterCameraConfig(views="ring"), 0.3)
+    assert len(ring) == 6 and ring[:, 2] == pytest.approx(0.6 * np.cos(np.pi / 6))
+    assert ClutterCameraConfig().fovy_deg == pytest.approx(2 * np.degrees(np.arctan(240 / 540)))
+
+
+def test_dex_noise_scales_the_image_and_warps_it_smoothly() -> None:
+    depth = np.full((48, 64), 0.6, dtype=np.float32)
+    depth[:4] = 0.0  # invalid pixels stay invalid
+    scale_only = apply_dex_noise(depth, DexNoiseConfig(gp_rate=0.0), np.random.default_rng(1))
+    factor = scale_only[10, 10] / 0.6
+    assert np.allclose(scale_only[4:], 0.6 * factor) and (scale_only[:4] == 0).all()
+    assert factor != 1.0 and abs(factor - 1.0) < 0.15  # gamma(1000, 0.001): sd 3 %
+    warped = apply_dex_noise(depth, DexNoiseConfig(gp_rate=1.0), np.random.default_rng(1))
+    off = warped[4:] - 0.6 * factor
+    assert 0.002 < off.std() < 0.008  # the 5 mm warp
+    # Smooth: neighbours differ by a fraction of the warp (drawn on a 4x coarser grid).
+    assert np.abs(np.diff(off, axis=1)).mean() < 0.5 * off.std()
+
+
+def _their_loop(labels: list[bool]) -> int:
+    """GIGA's clutter_removal.run counter, transcribed: attempts made before it stops."""
+    consecutive, last, n = 1, None, 0
+    for ok in labels:
+        if consecutive >= 2:
+            break
+        n += 1
+        if last is False and ok is False:
+            consecutive += 1
+        else:
+            consecutive = 1
+        last = ok
+    return n
+
+
+@pytest.mark.parametrize("labels", list(itertools.product([True, False], repeat=6)))
+def test_the_round_stops_where_their_counter_stops(labels) -> None:
+    """Objects never run out here (8 left): only the two-failure rule can stop the round."""
+    rule = ClutterConfig().rule
+    outcomes: list[str] = []
+    for ok in labels:
+        if rule.stop_reason(outcomes, objects_left=True) is not None:
+            break
+        outcomes.append("success" if ok else "empty_grasp")
+    assert len(outcomes) == _their_loop(list(labels))
+
+
+def test_the_round_stops_at_the_first_step_without_a_grasp_or_when_clear() -> None:
+    rule = ClutterConfig().rule
+    assert rule.stop_reason(["success", "no_grasp_found"], True) == "no grasp found"
+    assert rule.stop_reason(["success", "dropped"], True) is None
+    assert rule.stop_reason(["success"] * 5, False) == "the table is clear"
