@@ -5,13 +5,14 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from hsqbench.experiment.cluster import cluster_interval
 from hsqbench.experiment.clutter import clutter_table, render_clutter, vgn_round
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
 from hsqbench.experiment.report import load_run
 from hsqbench.experiment.runner import run_benchmark
-from hsqbench.experiment.stats import wilson_interval
 from tests.fake_backend import FakeBackend
 
 
@@ -53,8 +54,21 @@ def test_run_totals_follow_the_cut_rounds(tmp_path: Path) -> None:
     assert (row["vgn_successes"], row["vgn_attempts"], row["rounds_cut"]) == (k, n, cut)
     assert cut > 0  # the fake backend's failures include "no grasp found"
     assert row["declutter_percent"] == pytest.approx(100 * k / (12 * 4))
-    low, _ = wilson_interval(k, n)
-    assert row["vgn_gsr_low_percent"] == pytest.approx(100 * low)
+    # VGN's percent_cleared leaves out the rounds cut before their first grasp.
+    empty = sum(1 for o in by_round.values() if o[0] == "no_grasp_found")
+    assert row["vgn_percent_cleared"] == pytest.approx(100 * k / ((12 - empty) * 4))
+    # Intervals over rounds: the cluster bootstrap of the rounds' counts, not Wilson.
+    per = [
+        (o[: o.index("no_grasp_found")] if "no_grasp_found" in o else o) for o in by_round.values()
+    ]
+    k_r = np.array([x.count("success") for x in per])
+    low, high = cluster_interval(k_r, np.full(len(per), 4))
+    assert (row["declutter_low_percent"], row["declutter_high_percent"]) == pytest.approx(
+        (100 * low, 100 * high)
+    )
     assert row["declutter_percent"] <= row["our_cr_percent"]
+    # Paired to hsq over the same draws: the exact sign-flip test of the rounds' differences.
+    assert row["dr_vs_reference_rounds"] == 12
+    assert 0 <= row["dr_vs_reference_p"] <= row["dr_vs_reference_p_holm"] <= 1
     lines = render_clutter(load_run(run_dir), table.reset_index())
     assert any(x.startswith("| packed | antipodal |") for x in lines)

@@ -6,14 +6,15 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
+from hsqbench.experiment.cluster import rate_over_clusters
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig, PileConfig
 from hsqbench.experiment.pile_table import CONTEXT, TABLE4_CSV
 from hsqbench.experiment.report import TABLES_MD, write_report
 from hsqbench.experiment.runner import run_benchmark
-from hsqbench.experiment.stats import wilson_interval
 from tests.fake_backend import FakeBackend
 
 OBJECTS = ("mug", "bowl", "pear", "banana", "apple")
@@ -21,7 +22,7 @@ CONFIG = ExperimentConfig(
     planners=("hsq", "antipodal", "oracle"),
     isolated=IsolatedConfig(enabled=False),
     packed=PackedConfig(objects=OBJECTS, rounds=2, objects_per_round=3),
-    pile=PileConfig(enabled=True, objects=OBJECTS, rounds=4, objects_per_round=3),
+    pile=PileConfig(enabled=True, objects=OBJECTS, rounds=6, objects_per_round=3),
 )
 
 
@@ -41,22 +42,27 @@ def _rows(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
-def _from_csv(run_dir: Path, planner: str) -> tuple[int, int, int, int]:
-    k = n = cleared = presented = 0
-    with open(run_dir / "attempts.csv") as f:
-        for row in csv.DictReader(f):
-            if row["experiment"] == "pile" and row["planner"] == planner and row["status"] == "ok":
-                n += 1
-                k += row["success"] == "1"
+def _per_round(run_dir: Path, planner: str) -> dict[str, list[int]]:
+    """Pile round trial key -> [successes, attempts, cleared, presented]."""
+    out: dict[str, list[int]] = {}
     with open(run_dir / "rounds.csv") as f:
         for row in csv.DictReader(f):
             if row["trial_key"].startswith(f"pile/{planner}/"):
-                cleared += int(row["n_cleared"])
-                presented += int(row["n_objects"])
-    return k, n, cleared, presented
+                out[row["trial_key"]] = [0, 0, int(row["n_cleared"]), int(row["n_objects"])]
+    with open(run_dir / "attempts.csv") as f:
+        for row in csv.DictReader(f):
+            if row["experiment"] == "pile" and row["planner"] == planner and row["status"] == "ok":
+                out[row["trial_key"]][1] += 1
+                out[row["trial_key"]][0] += row["success"] == "1"
+    return out
 
 
-def test_table4_counts_the_pile_rounds_only_with_wilson_intervals(run_dir: Path) -> None:
+def _from_csv(run_dir: Path, planner: str) -> tuple[int, int, int, int]:
+    k, n, cleared, presented = np.array(list(_per_round(run_dir, planner).values())).sum(axis=0)
+    return int(k), int(n), int(cleared), int(presented)
+
+
+def test_table4_counts_the_pile_rounds_only_with_intervals_over_rounds(run_dir: Path) -> None:
     t4 = pd.read_csv(run_dir / TABLE4_CSV)
     measured = t4[t4["source"] != CONTEXT].set_index("method")
     assert list(measured.index) == ["hsq", "antipodal", "oracle (privileged)"]
@@ -73,14 +79,19 @@ def test_table4_counts_the_pile_rounds_only_with_wilson_intervals(run_dir: Path)
             == (cleared, presented)
             == (
                 cleared,
-                4 * 3,
+                6 * 3,
             )
         )
-        assert row["rounds"] == 4
-        low, high = wilson_interval(k, n, 0.95)
+        assert row["rounds"] == 6
+        per = np.array(list(_per_round(run_dir, planner).values()))
+        low, high = rate_over_clusters(per[:, 0], per[:, 1], 0.95)
         assert row["gsr_percent"] == pytest.approx(100 * k / n)
         assert (row["gsr_ci_low_percent"], row["gsr_ci_high_percent"]) == pytest.approx(
-            (100 * low, 100 * high)
+            (100 * low, 100 * high), nan_ok=True
+        )
+        low, high = rate_over_clusters(per[:, 2], per[:, 3], 0.95)
+        assert (row["cr_ci_low_percent"], row["cr_ci_high_percent"]) == pytest.approx(
+            (100 * low, 100 * high), nan_ok=True
         )
         assert row["cr_percent"] == pytest.approx(100 * cleared / presented)
     # The packed rounds of the same run stay out of Table IV.
@@ -110,7 +121,7 @@ def test_gigas_reported_pile_numbers_are_a_separate_context_row(run_dir: Path) -
 def test_unpilable_draws_are_recorded_in_run_json_and_rounds_csv(run_dir: Path) -> None:
     meta = json.loads((run_dir / "run.json").read_text())
     piles = meta["pile_draws"]
-    assert len(piles) == 4
+    assert len(piles) == 6
     for entry in piles.values():
         assert not {"mug", "pear"} <= set(entry["objects"])
     redrawn = [k for k, v in piles.items() if v["rejected"]]

@@ -102,12 +102,9 @@ def test_tables_hold_reported_and_measured_rows_with_intervals(run_dir: Path) ->
 
         cleared, presented = _cleared_from_csv(run_dir, planner)
         kp, np_, errp = _counts_from_csv(run_dir, "packed", planner)
-        lo_c, hi_c = wilson_interval(cleared, presented)
         packed_line = [x for x in md.splitlines() if x.startswith(f"| {planner} |")][1]
-        assert (
-            f"| {100 * cleared / presented:.1f} | [{100 * lo_c:.1f}, {100 * hi_c:.1f}] |"
-            in packed_line
-        )
+        # Packed intervals are over rounds: four rounds are too few for one.
+        assert f"| {100 * cleared / presented:.1f} | — |" in packed_line
         assert f"| {100 * kp / np_:.1f} |" in packed_line
         assert f"| {errp} | measured" in packed_line
 

@@ -125,6 +125,18 @@ def paired_ratio_interval(
     return _bootstrap((kp, np_, kr, nr), difference, confidence, seed)
 
 
+def rate_over_clusters(
+    successes: np.ndarray, trials: np.ndarray, confidence: float = 0.95
+) -> tuple[float, float]:
+    """The interval of sum(successes) / sum(trials) over the clusters with trials (e.g. the GSR
+    or CR of packed rounds); NaN with fewer than :data:`MIN_CLUSTERS` such clusters."""
+    k, n = np.asarray(successes, dtype=float), np.asarray(trials, dtype=float)
+    keep = n > 0
+    if keep.sum() < MIN_CLUSTERS:
+        return np.nan, np.nan
+    return cluster_interval(k[keep], n[keep], confidence)
+
+
 @dataclass(frozen=True)
 class ObjectSpread:
     """How a planner's per-object rates spread: objects under 50 %, and the worst ones."""

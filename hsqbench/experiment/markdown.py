@@ -67,7 +67,8 @@ def _header(data: RunData, conf: str) -> list[str]:
     out.append(
         f"Config `{meta.get('config_name', '?')}` (hash `{meta.get('config_hash', '?')}`), "
         f"code {', '.join(f'`{v}`' for v in versions) or '?'}, base seeds "
-        f"{_seeds(meta)}. Intervals: Wilson, {conf}."
+        f"{_seeds(meta)}. Intervals ({conf}): Wilson for isolated rates; over rounds (cluster "
+        "bootstrap) for packed and pile GSR and CR."
     )
     out.append("")
     n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0
@@ -183,6 +184,12 @@ def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> l
         headers += ["GSR graspable", f"{conf} CI", "CR graspable", f"{conf} CI"]
     headers += ["rounds", "errors"]
     out += [md_table([*headers, "source"], rows), ""]
+    out += [
+        "GSR and CR intervals over rounds (cluster bootstrap): the objects and grasps of one "
+        "round share a scene and a sequence, so rounds, not objects, are independent"
+        + ("; the graspable columns' intervals are Wilson." if graspability else "."),
+        "",
+    ]
     return out
 
 

@@ -41,10 +41,10 @@ def verdict_sections(
     """(CSV name -> table, markdown lines) of the three sections; empty tables are left out."""
     ref = check_reference(data, reference)
     paired, per_object = paired_table(data, ref), paired_per_object(data, ref)
-    objects, clutter = object_level(data), clutter_table(data)
+    objects, clutter = object_level(data), clutter_table(data, ref)
     lines = render_paired(data, paired, per_object, ref)
     lines += render_object_level(data, objects)
-    lines += render_clutter(data, clutter)
+    lines += render_clutter(data, clutter, ref)
     tables = {
         PAIRED_CSV: paired,
         PAIRED_OBJECTS_CSV: per_object,
