@@ -95,7 +95,7 @@ benchmark: $(STAMP)
 # on a 2-core machine the unseen objects' three seeds took 49 min for hsq and antipodal alone;
 # contact-graspnet, where installed, adds about 15 min per sweep on the paper's objects
 # (SWEEP_PLANNERS="hsq single-sq antipodal" leaves it out; a later run adds it to the same runs).
-# Rerunning resumes; SWEEP_ARGS="--seeds 0 1 2 3 4" scales them up (new runs, narrower bands).
+# Rerunning resumes (--resume); SWEEP_ARGS="--seeds 0 1 2 3 4" scales them up (new runs, narrower bands).
 SWEEPS ?= depth_noise calibration cameras pad_friction
 SWEEP_PLANNERS ?=
 SWEEP_ARGS ?=

@@ -4,7 +4,7 @@ Builds isolated and packed scenes of a protocol's objects in their resting poses
 hulls as the trial runner does, and times ``OraclePlanner.plan`` and the graspability check
 (``feasible_grasps``) on each. Objects must be built (``hsqbench assets build --protocol ycb``).
 
-    .venv/bin/python bench/bench_oracle.py [--config ycb] [--isolated 20] [--packed 5]
+    .venv/bin/python bench/bench_oracle.py [--protocol ycb] [--isolated 20] [--packed 5]
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--config", default="ycb", help="protocol whose objects to use")
+    parser.add_argument("--protocol", default="ycb", help="protocol whose objects to use")
     parser.add_argument("--isolated", type=int, default=20, help="isolated scenes")
     parser.add_argument("--packed", type=int, default=5, help="packed scenes of 5 objects")
     args = parser.parse_args()
@@ -30,7 +30,7 @@ def main() -> int:
     from hsqbench.sim.scene import build_scene, load_scene_config
     from hsqbench.sim.scene_truth import scene_truth
 
-    cfg = load_experiment_config(args.config)
+    cfg = load_experiment_config(args.protocol)
     scene = load_scene_config("scene_resting")
     oracle = OraclePlanner()
     rng = np.random.default_rng(0)

@@ -14,7 +14,7 @@ as its mesh frame has it, planned with the table plane and the two side cameras.
 points at most twice the 20 000-point CPU time (the cleaning's voxel thinning bounds the
 density, configs/planner.yaml ``cleaning.voxel_m``). ``--series`` runs only this series.
 
-    .venv/bin/python bench/bench_planner.py [--points 10000] [--repeats 5] [--config NAME]
+    .venv/bin/python bench/bench_planner.py [--points 10000] [--repeats 5] [--planner-config NAME]
     .venv/bin/python bench/bench_planner.py --series [--repeats 5]
 """
 
@@ -181,14 +181,14 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, default=10_000)
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--config", default=None, help="planner config name or path")
+    parser.add_argument("--planner-config", default=None, help="planner config name or path")
     parser.add_argument("--series", action="store_true", help="only the dense drill series")
     args = parser.parse_args()
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)
     rng = np.random.default_rng(0)
-    config = resolve_config(args.config)
+    config = resolve_config(args.planner_config)
     if args.series:
         dense_series(config, args.repeats)
         return 0

@@ -63,7 +63,7 @@ def main() -> int:
     parser.add_argument("--seeds", nargs="*", type=int, default=[0, 1, 2])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--planner", default="hsq", help="a registered planner")
-    parser.add_argument("--config", default=None, help="planner config name or path")
+    parser.add_argument("--planner-config", default=None, help="planner config name or path")
     parser.add_argument("--save", default=None, help="write every cloud's grasps to this .npz")
     parser.add_argument("--compare", default=None, help="check the grasps against this .npz")
     args = parser.parse_args()
@@ -78,7 +78,7 @@ def main() -> int:
     keep_freed_memory()  # as in a benchmark's trial process
     paper = set(YCB_OBJECTS)
     reference = dict(np.load(args.compare)) if args.compare else None
-    planner = get_planner(args.planner, args.config)
+    planner = get_planner(args.planner, args.planner_config)
     cpu: dict[str, float] = {}
     stages: dict[str, list[float]] = {}
     grasps: dict[str, np.ndarray] = {}

@@ -56,7 +56,7 @@ def protocol_planners(
     """The protocol and the planners to run: ``chosen`` (names or plugin specs) or the
     protocol's own, less optional ones whose extra is missing (said on stderr). A chosen planner
     the protocol lacks joins its list (as in ``sweep``): the run's identity then names it, and
-    ``report --with`` joins this run to another of the same protocol."""
+    ``report --join`` joins this run to another of the same protocol."""
     import dataclasses
 
     from hsqbench.planner.registry import resolve_planners, runnable

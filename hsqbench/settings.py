@@ -25,7 +25,7 @@ from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 CONFIG_DIR = REPO_ROOT / "configs"
-#: The benchmark protocols users run (``--config paper``), apart from the component configs.
+#: The benchmark protocols users run (``--protocol paper``), apart from the component configs.
 PROTOCOL_DIR = CONFIG_DIR / "protocols"
 #: The built-in robustness sweeps (``hsqbench sweep depth_noise``).
 SWEEP_DIR = PROTOCOL_DIR / "sweeps"

@@ -187,7 +187,7 @@ def test_failed_graspable_ignores_ungraspable_failures():
 
 def test_rows_of_runs_before_the_grasp_columns_are_refused():
     row = {"trial_key": KEY, "attempt_index": "0", "outcome": "dropped", "grasp_pose": ""}
-    with pytest.raises(ReplayError, match=r"no grasp_pose: .*`hsqbench replay RUN --replan`"):
+    with pytest.raises(ReplayError, match=r"no grasp_pose: .*`hsqbench replay --run RUN --replan`"):
         recorded_grasp(row)
     assert recorded_grasp({**row, "outcome": "no_grasp_found"}) is None
 

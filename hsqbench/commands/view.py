@@ -1,4 +1,4 @@
-"""``hsqbench view OUT.rrd``: open a recorded episode in the Rerun viewer, or say how to."""
+"""``hsqbench view RECORDING``: open a recorded episode in the Rerun viewer, or say how to."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ WEB_PORT = 9090
 RRD_PORT = 9877
 
 _EPILOG = """\
-Record an episode with `hsqbench trial --object NAME --seed N --rerun OUT.rrd`.
+Record an episode with `hsqbench trial --object NAME --seed N --rerun episode.rrd`.
 
 The native viewer needs a display (DISPLAY or WAYLAND_DISPLAY on Linux) and the `rerun`
 executable of the rerun-sdk package. Without them this prints a summary of the recording and how

@@ -1,4 +1,4 @@
-"""One report over several runs of the same protocol (``hsqbench report RUN --with OTHER``).
+"""One report over several runs of the same protocol (``hsqbench report --run RUN --join OTHER``).
 
 A planner added later (e.g. one that needs an optional extra) can run in its own run folder:
 trial seeds derive from (base seed, experiment, object, index) alone, so two runs of the same

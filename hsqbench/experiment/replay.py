@@ -53,7 +53,7 @@ def recorded_grasp(row: dict[str, str]) -> Grasp | None:
         raise ReplayError(
             f"attempt {row['trial_key']}#{row['attempt_index']} has no grasp_pose: the run was "
             "made before attempts.csv recorded grasp poses; re-plan it instead with "
-            "`hsqbench replay RUN --replan`"
+            "`hsqbench replay --run RUN --replan`"
         )
     position, rotation = from_pose7(numbers(field))
     pose = Pose(position, rotation)

@@ -1,4 +1,4 @@
-"""Tables and plots of a run, made from its results files alone (``hsqbench report RUN_DIR``).
+"""Tables and plots of a run, made from its results files alone (``hsqbench report --run RUN``).
 
 Definitions (as in the paper, Section V):
 
@@ -13,7 +13,7 @@ Definitions (as in the paper, Section V):
 
 Rows marked "reported, real robot" are the paper's Tables I and II (other robots and setups for
 the baselines); rows marked "measured, simulation (this run)" come from this run's files, and
-"measured, simulation (run NAME)" from run NAME's, joined with ``--with``.
+"measured, simulation (run NAME)" from run NAME's, joined with ``--join``.
 """
 
 from __future__ import annotations

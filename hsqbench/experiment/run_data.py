@@ -38,7 +38,7 @@ class RunData:
     confidence: float
     notes: list[str] = field(default_factory=list)
     measured: str = MEASURED  # provenance label of this run's rows (names a non-simulation backend)
-    # Planners joined from other runs (``--with``): planner -> their rows' provenance label.
+    # Planners joined from other runs (``--join``): planner -> their rows' provenance label.
     joined: dict[str, str] = field(default_factory=dict)
 
     def source(self, planner: str) -> str:

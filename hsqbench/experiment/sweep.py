@@ -9,8 +9,8 @@ Layout of a sweep folder (default ``runs/sweeps/``)::
 
 A point's run folder is named by what its results depend on (the protocol at the sweep's size
 and the overrides), so points with the same settings share one run: the protocol's own settings
-(empty overrides) are run once for all parameters of a folder. Rerunning a sweep resumes every
-run (finished trials are skipped, :func:`hsqbench.experiment.runner.run_benchmark`); a sweep with
+(empty overrides) are run once for all parameters of a folder. Rerunning a sweep (``--resume``)
+resumes every run (finished trials are skipped, :func:`hsqbench.experiment.runner.run_benchmark`); a sweep with
 other sizes or seeds runs into new folders. All points run the same trials (same seeds, same
 poses), so two points differ only by their settings.
 """
@@ -128,7 +128,7 @@ def _record(
     """Merge these parameters (with their points' run folders) into ``sweep.json``.
 
     A parameter recorded before with the same points keeps the runs of the protocols this sweep
-    leaves out (``hsqbench sweep NAME --protocol ycb``), so protocols can be run one at a time.
+    leaves out (``hsqbench sweep NAME --protocols ycb``), so protocols can be run one at a time.
     Each protocol is recorded with the seeds it ran.
     """
     path = root / SWEEP_FILE

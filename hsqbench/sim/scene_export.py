@@ -1,4 +1,4 @@
-"""Write a composed scene as a self-contained MJCF folder (``hsqbench scene --xml DIR``).
+"""Write a composed scene as a self-contained MJCF folder (``hsqbench scene --mjcf DIR``).
 
 ``DIR/scene.xml`` holds the whole scene (static world, Panda, objects) with the settled state as
 its keyframe ``initial``; ``DIR/assets/`` holds a copy of every mesh and texture file it uses, so
@@ -26,7 +26,7 @@ SCENE_FILE = "scene.xml"
 ASSETS = "assets"
 ATTRIBUTION = """# Scene {name}
 
-Exported by hsqbench (`hsqbench scene --kind {kind} --seed {seed} --xml DIR`): open it with
+Exported by hsqbench (`hsqbench scene --scene {kind} --seed {seed} --mjcf DIR`): open it with
 `python -m mujoco.viewer --mjcf {scene}` (the keyframe `initial` is the settled scene).
 
 - Robot: MuJoCo Menagerie `franka_emika_panda` (Apache-2.0), with hsqbench's documented changes.
