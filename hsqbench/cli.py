@@ -77,4 +77,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # `python -m hsqbench.cli` runs this file as __main__, but the commands raise
+    # hsqbench.cli's CommandError: run that module's main, whose user_errors() knows it.
+    from hsqbench.cli import main as cli_main
+
+    sys.exit(cli_main())

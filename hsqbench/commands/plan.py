@@ -27,7 +27,8 @@ Grasp frame: P_G is the closing point (between the pads), 'closing' the axis joi
 'approach' the direction from the palm toward P_G.
 
 Exit status: 0 when grasps were found, 1 when none survived (the reason is printed),
-2 on bad input (unreadable, empty or non-finite cloud, bad option).
+2 on bad input (unreadable, empty or non-finite cloud, bad option) and when the planner
+raised or broke its contract (one line names its file and line).
 """
 
 
@@ -101,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hsqbench.cloud_io import read_cloud
     from hsqbench.planner.api import PlanningContext
+    from hsqbench.planner.failure import checked_plan
     from hsqbench.planner.registry import get_planner
     from hsqbench.settings import code_version
 
@@ -112,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         camera_positions=None if args.camera is None else np.asarray(args.camera, dtype=float),
     )
-    result = planner.plan(points, context)
+    result = checked_plan(planner, points, context)  # PlannerError: one line, exit 2
     print(f"{args.cloud}: {points.shape[0]} points, planner {args.planner}")
     if result.remaining:
         steps = " -> ".join(f"{k} {v}" for k, v in result.remaining.items())

@@ -25,10 +25,12 @@ A packed round (--scene packed) places five objects (--objects, or drawn by the 
 attempts until the table is clear or two attempts in a row fail. A pile round (--scene pile) is
 the same on five objects dropped into a heap.
 
-Outcomes: success, no_grasp_found, unreachable, collision_on_approach, empty_grasp, dropped,
-sim_unstable. The same seed and config give the same outcomes.
+Outcomes: success, no_grasp_found, planner_error, unreachable, collision_on_approach,
+empty_grasp, dropped, sim_unstable. The same seed and config give the same outcomes.
 
-Exit status: 0 when the trial ran (whatever its outcome), 2 on bad input.
+Exit status: 0 when the trial ran (whatever its outcome), 2 on bad input, and 2 when the
+planner raised or broke its contract (one line names its file and line; a benchmark counts
+such an attempt as the planner's failure, planner_error).
 """
 
 
@@ -112,6 +114,8 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from hsqbench.overrides import parse_assignments
+    from hsqbench.planner.failure import PlannerError
+    from hsqbench.sim.outcome import Outcome
     from hsqbench.sim.trial import load_trial_config, run_isolated_trial, run_packed_round
 
     _check_names(args)
@@ -131,6 +135,9 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if recorder is not None:
             recorder.close()
+    broken = [a.detail for a in result.attempts if a.outcome == Outcome.PLANNER_ERROR]
+    if broken:  # the planner's own code failed: one line where it did, as for bad input
+        raise PlannerError(broken[0])
     for i, a in enumerate(result.attempts):
         print(_line(i, a))
     if args.scene == "isolated":

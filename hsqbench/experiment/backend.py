@@ -7,7 +7,9 @@ worker. Tests inject a fake backend (:mod:`tests.fake_backend`). A backend must 
 picklable (it is sent to worker processes) and deterministic for a given trial seed.
 
 :func:`execute_trial` wraps a call: any exception raised by the backend becomes an *error* record
-(an infrastructure failure, never a grasp outcome), so one bad trial cannot stop a run.
+(a harness fault: a scene that could not be built, a worker that died; never a grasp outcome),
+so one bad trial cannot stop a run. A planner's own exception never gets here: the trial runner
+records it as that planner's ``planner_error`` attempt (:mod:`hsqbench.planner.failure`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from hsqbench.experiment.heap import keep_freed_memory
 from hsqbench.experiment.seeds import TrialSpec
+from hsqbench.planner.failure import one_line
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
 
 ERROR_DETAIL_CHARS = 600
@@ -95,8 +98,7 @@ class TrialRun:
 
 
 def _one_line(text: str) -> str:
-    text = " | ".join(part.strip() for part in text.strip().splitlines() if part.strip())
-    return text if len(text) <= ERROR_DETAIL_CHARS else text[: ERROR_DETAIL_CHARS - 3] + "..."
+    return one_line(text, ERROR_DETAIL_CHARS)
 
 
 def _check_result(spec: TrialSpec, result: Any) -> None:

@@ -16,7 +16,8 @@ and a declutter rate, which the two codes count differently when a round logs no
 Our rounds (:mod:`hsqbench.sim.stop_rule`) share the first two rules but count "no grasp found"
 as a failed attempt and go on. Up to the first such attempt a round is the same under both rules
 (the same attempts, the same scene), so their numbers follow from our rows: cut each round at its
-first ``no_grasp_found`` attempt, and count successes and attempts before it. A run made with
+first attempt without a grasp (``no_grasp_found``, or the planner's own error,
+``planner_error``), and count successes and attempts before it. A run made with
 ``stop_on_no_grasp: true`` needs no cut. Our attempt cap and a simulation that became unstable
 end a round in both counts.
 """
@@ -35,7 +36,7 @@ from hsqbench.experiment.markdown import p_text, signed_pp
 from hsqbench.experiment.over_clusters import ClusterDifference
 from hsqbench.experiment.results import STATUS_OK
 from hsqbench.experiment.run_data import RunData
-from hsqbench.sim.stop_rule import NO_GRASP_FOUND
+from hsqbench.sim.stop_rule import NO_GRASP
 
 CLUTTER_CSV = "clutter_vgn.csv"
 KINDS = ("packed", "pile")
@@ -44,7 +45,7 @@ KINDS = ("packed", "pile")
 def vgn_round(outcomes: list[str], successes: list[bool]) -> tuple[int, int, bool]:
     """(successful grasps, grasps executed, cut short) of one round's attempts in order, under
     VGN's rule: the round ends before its first attempt without a grasp."""
-    cut = outcomes.index(NO_GRASP_FOUND) if NO_GRASP_FOUND in outcomes else len(outcomes)
+    cut = next((i for i, o in enumerate(outcomes) if o in NO_GRASP), len(outcomes))
     return int(sum(successes[:cut])), cut, cut < len(outcomes)
 
 

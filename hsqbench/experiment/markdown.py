@@ -13,6 +13,9 @@ from hsqbench.experiment.run_data import MEASURED, RunData
 from hsqbench.sim.outcome import Outcome
 
 OUTCOME_COLUMNS = (*[str(o) for o in Outcome], "error")
+#: The tables' two error columns: the planner's own (``planner_error`` attempts, failures in GSR
+#: and CR) and the harness's (trials that could not run, left out of both).
+ERROR_HEADS = ("planner errors", "infrastructure errors")
 
 
 def md_table(headers: list[str], rows: list[list[str]]) -> str:
@@ -40,6 +43,14 @@ def _kn(row: pd.Series, k: str, n: str) -> str:
     """``k/n``, or a dash where there is nothing to count (an older run without the column)."""
     total = row.get(n, np.nan)
     return f"{int(row[k])}/{int(total)}" if np.isfinite(total) and total > 0 else "—"
+
+
+def _error_cells(row: pd.Series, measured: bool) -> list[str]:
+    """The planner's own errors (failed attempts, in the rates) and the infrastructure errors
+    (trials that could not run, left out), as :data:`ERROR_HEADS`."""
+    if not measured:
+        return ["—", "—"]
+    return [str(int(row["planner_errors"])), str(int(row["errors"]))]
 
 
 def _interval(row: pd.Series, prefix: str = "") -> str:
@@ -74,9 +85,9 @@ def _header(data: RunData, conf: str) -> list[str]:
     n_err = int((data.attempts["status"] == STATUS_ERROR).sum()) if len(data.attempts) else 0
     if n_err:
         out += [
-            f"**Warning: {n_err} trial(s) failed with an infrastructure error** (column `errors`); "
-            "they are not attempts and are left out of GSR and CR. Resume the run with "
-            "`--retry-errors` once the cause is fixed.",
+            f"**Warning: {n_err} trial(s) failed with an infrastructure error** (column "
+            "`infrastructure errors`); they are not attempts and are left out of GSR and CR. "
+            "Resume the run with `--retry-errors` once the cause is fixed.",
             "",
         ]
     out += [f"Note: {n}." for n in data.notes] + ([""] if data.notes else [])
@@ -109,14 +120,14 @@ def _table1(data: RunData, t1: pd.DataFrame, conf: str, graspability: bool) -> l
                 _interval(r) if measured else "—",
                 f"{int(r['successes'])}/{int(r['attempts'])}" if measured else "—",
                 *extra,
-                str(int(r["errors"])) if measured else "—",
+                *_error_cells(r, measured),
                 str(r["source"]),
             ]
         )
     heads = ["method", "GSR", f"{conf} CI", "k/n"]
     if graspability:
         heads += ["GSR graspable", f"{conf} CI", "k/n graspable"]
-    out += [md_table([*heads, "errors", "source"], rows), ""]
+    out += [md_table([*heads, *ERROR_HEADS, "source"], rows), ""]
     return out
 
 
@@ -175,14 +186,14 @@ def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> l
                 _interval(r, "cr_") if measured else "—",
                 *extra,
                 f"{int(r['rounds'])}" if measured else "—",
-                str(int(r["errors"])) if measured else "—",
+                *_error_cells(r, measured),
                 str(r["source"]),
             ]
         )
     headers = ["method", "GSR", f"GSR {conf} CI", "CR", f"CR {conf} CI"]
     if graspability:
         headers += ["GSR graspable", f"{conf} CI", "CR graspable", f"{conf} CI"]
-    headers += ["rounds", "errors"]
+    headers += ["rounds", *ERROR_HEADS]
     out += [md_table([*headers, "source"], rows), ""]
     out += [
         "GSR and CR intervals over rounds (cluster bootstrap): the objects and grasps of one "
@@ -197,7 +208,12 @@ def _outcomes(outcomes: pd.DataFrame) -> list[str]:
     """Attempt counts per outcome and planner."""
     if outcomes.empty:
         return []
-    out = ["## Outcomes per planner (attempt counts; `error` = trials that could not run)", ""]
+    out = [
+        "## Outcomes per planner (attempt counts; `planner_error` = the planner raised or "
+        "returned an invalid grasp, a failed attempt; `error` = trials that could not run, not "
+        "attempts)",
+        "",
+    ]
     cols = [c for c in OUTCOME_COLUMNS if outcomes[c].sum() > 0 or c == "success"]
     rows = [
         [r["experiment"], r["planner"], *[str(int(r[c])) for c in cols]]
@@ -232,8 +248,10 @@ def _notes(data: RunData, graspability: bool) -> list[str]:
     out = [
         "## Notes",
         "",
-        "- GSR = successful attempts / attempts (an attempt where no grasp was found counts as "
-        "a failed attempt); CR = objects removed / objects presented, summed over rounds.",
+        "- GSR = successful attempts / attempts (an attempt where no grasp was found, or where "
+        "the planner raised or returned an invalid grasp, counts as a failed attempt); CR = "
+        "objects removed / objects presented, summed over rounds. Trials that could not run "
+        "(infrastructure errors) are left out of both.",
         "- The CR interval treats the objects of a round as independent; it is optimistic.",
         *(
             [

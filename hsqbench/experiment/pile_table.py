@@ -1,11 +1,11 @@
 """Table IV: pile scenes (objects heaped and touching), GSR and CR per planner.
 
 Measured rows come from the run's ``pile`` rounds, defined as Table II's: GSR = successful
-attempts / attempts (no grasp found counts as a failed attempt), CR = objects removed / objects
-presented, intervals over rounds (cluster bootstrap). The oracle's row (privileged: true meshes) is the hand's ceiling on
-the same piles. Beside them, GIGA's reported simulated pile numbers, as context only: another
-harness (PyBullet, one noisy depth view, its own objects, VGN's stop rule), not a like-for-like
-comparison.
+attempts / attempts (no grasp found and the planner's own error count as failed attempts),
+CR = objects removed / objects presented, intervals over rounds (cluster bootstrap). The
+oracle's row (privileged: true meshes) is the hand's ceiling on the same piles. Beside them,
+GIGA's reported simulated pile numbers, as context only: another harness (PyBullet, one noisy
+depth view, its own objects, VGN's stop rule), not a like-for-like comparison.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import pandas as pd
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.run_data import RunData
 from hsqbench.experiment.stats import Rate
+from hsqbench.sim.outcome import Outcome
 
 TABLE4_CSV = "table4_pile.csv"
 EXPERIMENT = "pile"
@@ -80,6 +81,7 @@ def table4(data: RunData) -> pd.DataFrame:
                 "objects_cleared": cleared,
                 "objects_presented": presented,
                 "rounds": len(done),
+                "planner_errors": int((ok["outcome"] == str(Outcome.PLANNER_ERROR)).sum()),
                 "errors": int((mine["status"] == STATUS_ERROR).sum()),
                 "reference": "",
             }
@@ -105,7 +107,7 @@ def render_table4(data: RunData, t4: pd.DataFrame) -> list[str]:
         return []
     conf = f"{100 * data.confidence:g} %"
     heads = ["method", "GSR", f"GSR {conf} CI", "k/n", "CR", f"CR {conf} CI", "cleared/presented"]
-    heads += ["rounds", "errors", "source"]
+    heads += ["rounds", "planner errors", "infrastructure errors", "source"]
     measured = t4[t4["source"] != CONTEXT]
     context = t4[t4["source"] == CONTEXT]
     lines = ["## Table IV: pile scenes, GSR and CR (%)", ""]
@@ -132,6 +134,7 @@ def render_table4(data: RunData, t4: pd.DataFrame) -> list[str]:
             _ci(r, "cr_"),
             f"{int(r['objects_cleared'])}/{int(r['objects_presented'])}",
             str(int(r["rounds"])),
+            str(int(r["planner_errors"])),
             str(int(r["errors"])),
             str(r["source"]),
         ]
@@ -142,7 +145,7 @@ def render_table4(data: RunData, t4: pd.DataFrame) -> list[str]:
     )
     for _, r in context.iterrows():
         cells = [str(r["method"]), _pct(r["gsr_percent"]), "—", "—", _pct(r["cr_percent"])]
-        cells += ["—", "—", "—", "—", str(r["source"])]
+        cells += ["—", "—", "—", "—", "—", str(r["source"])]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "GSR and CR intervals over rounds (cluster bootstrap): a pile's objects and "
               "grasps are not independent.", ""]  # fmt: skip

@@ -29,9 +29,7 @@ from hsqbench.planner.grasp import Grasp
 from hsqbench.sim.ik_types import Pose
 from hsqbench.sim.outcome import Attempt
 from hsqbench.sim.recorded_pose import from_pose7
-
-#: Outcomes after which no grasp was motion-planned: nothing to re-execute.
-_NO_GRASP = "no_grasp_found"
+from hsqbench.sim.stop_rule import NO_GRASP
 
 
 class ReplayError(ValueError):
@@ -46,7 +44,7 @@ def recorded_grasp(row: dict[str, str]) -> Grasp | None:
         ReplayError: the row has no ``grasp_pose`` although a grasp was planned (a run made
             before the grasp columns).
     """
-    if row.get("outcome") == _NO_GRASP:
+    if row.get("outcome") in NO_GRASP:  # no grasp was motion-planned: nothing to re-execute
         return None
     field = row.get("grasp_pose", "")
     if not field:

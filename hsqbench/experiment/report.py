@@ -3,8 +3,10 @@
 Definitions (as in the paper, Section V):
 
 - GSR = successful attempts / attempts. Every recorded attempt counts, including "no grasp
-  found"; trials that failed with an infrastructure *error* are not attempts and are left out
-  (and reported, with a warning).
+  found" and the planner's own errors (``planner_error``: it raised, or returned an invalid
+  grasp; counted per planner in ``planner_errors``); trials that failed with an
+  infrastructure *error* (a harness fault: a scene that could not be built, a worker that died)
+  are not attempts and are left out (counted in ``errors``, and reported with a warning).
 - CR (packed) = objects removed / objects presented, summed over rounds.
 - Intervals of isolated rates are Wilson score intervals at the run's confidence level
   (``run.json``; 95 % if absent), pooled over base seeds; those of packed (and pile) GSR and CR
@@ -47,12 +49,14 @@ from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.run_data import RunData, load_run
 from hsqbench.experiment.stats import Rate, summarize_times
 from hsqbench.experiment.verdicts import verdict_sections
+from hsqbench.sim.outcome import Outcome
 
 TABLES_MD = "tables.md"
 TABLE1_CSV = "table1_isolated.csv"
 TABLE1_OBJECTS_CSV = "table1_per_object.csv"
 TABLE2_CSV = "table2_packed.csv"
 OUTCOMES_CSV = "outcomes.csv"
+PLANNER_ERROR = str(Outcome.PLANNER_ERROR)
 TIMES_CSV = "planning_time.csv"
 
 
@@ -70,6 +74,11 @@ def _errors(df: pd.DataFrame, experiment: str, planner: str) -> int:
         return 0
     sel = (df["experiment"] == experiment) & (df["status"] == STATUS_ERROR)
     return int((sel & (df["planner"] == planner)).sum())
+
+
+def _planner_errors(ok: pd.DataFrame) -> int:
+    """Attempts of ``ok`` (finished trials' rows) that ended in the planner's own error."""
+    return int((ok["outcome"] == PLANNER_ERROR).sum()) if len(ok) else 0
 
 
 def _rate_cells(rate: Rate | None) -> dict[str, Any]:
@@ -126,6 +135,7 @@ def table1(data: RunData) -> pd.DataFrame:
                     "graspable_successes",
                     "graspable_attempts",
                 ),
+                "planner_errors": _planner_errors(ok),
                 "errors": errors,
             }
         )
@@ -235,6 +245,7 @@ def table2(data: RunData) -> pd.DataFrame:
                     "graspable_objects_presented",
                 ),
                 "rounds": len(rounds),
+                "planner_errors": _planner_errors(ok),
                 "errors": errors,
             }
         )
@@ -242,7 +253,8 @@ def table2(data: RunData) -> pd.DataFrame:
 
 
 def outcome_table(data: RunData) -> pd.DataFrame:
-    """Counts of each attempt outcome (and of error trials) per experiment and planner."""
+    """Counts of each attempt outcome (``planner_error`` among them) and of error trials
+    (infrastructure errors, not attempts) per experiment and planner."""
     rows = []
     df = data.attempts
     for exp in EXPERIMENTS:
@@ -327,7 +339,8 @@ def write_report(
     if n_err:
         warnings.warn(
             f"{n_err} trial(s) in {run_dir} failed with an infrastructure error and are left out "
-            "of GSR and CR (see the errors column and attempts.csv detail)",
+            "of GSR and CR (see the errors column and attempts.csv detail; a planner's own "
+            "errors are failed attempts, column planner_errors)",
             stacklevel=2,
         )
     return written

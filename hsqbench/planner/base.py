@@ -24,6 +24,7 @@ from hsqbench.planner.cleaning import (
     all_removed_reason,
     clean_cloud,
 )
+from hsqbench.planner.failure import check_result
 from hsqbench.planner.gripper import resolve_gripper
 from hsqbench.planner.hsq.config import GraspConfig, resolve_config
 from hsqbench.planner.hsq.stage_two.candidates import (
@@ -137,6 +138,7 @@ class PlannerBase(abc.ABC):
         if clean.points.shape[0] == 0:
             return clean.empty_result(cleaning, self.name)
         result = self.stages(clean, context)
+        check_result(self, result, "stages")
         result.planner = self.name
         result.n_removed = clean.n_removed
         result.timings = {"cleaning": clean.seconds, **result.timings}

@@ -26,6 +26,12 @@ from numpy.typing import NDArray
 GRASP_TO_MENAGERIE_HAND = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
+class InvalidGrasp(ValueError):
+    """A :class:`Grasp` built with values its contract rules out (a NaN or infinite pose, a
+    rotation that is not one, a negative width); a planner that builds one has failed
+    (:mod:`hsqbench.planner.failure` names the planner's line that built it)."""
+
+
 @dataclass(frozen=True)
 class Grasp:
     """A grasp pose with its width, score and provenance.
@@ -56,28 +62,37 @@ class Grasp:
     approach_width: float = float("nan")
 
     def __post_init__(self) -> None:
-        position = np.asarray(self.position, dtype=np.float64).reshape(3)
-        rotation = np.asarray(self.rotation, dtype=np.float64).reshape(3, 3)
+        try:
+            position = np.asarray(self.position, dtype=np.float64).reshape(3)
+            rotation = np.asarray(self.rotation, dtype=np.float64).reshape(3, 3)
+            width, score = float(self.width), float(self.score)
+        except (TypeError, ValueError) as exc:
+            raise InvalidGrasp(
+                "a grasp is a position of 3 numbers, a 3x3 rotation, a width in metres and a "
+                f"score: {exc}"
+            ) from None
+        if np.isnan(score):  # the harness orders grasps by score
+            raise InvalidGrasp("grasp score must be a number, got NaN")
         if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
-            raise ValueError("grasp position and rotation must be finite")
+            raise InvalidGrasp("grasp position and rotation must be finite")
         if np.max(np.abs(rotation.T @ rotation - np.eye(3))) > 1e-6 or (
             np.dot(np.cross(rotation[:, 0], rotation[:, 1]), rotation[:, 2]) < 0
         ):
-            raise ValueError(
+            raise InvalidGrasp(
                 "grasp rotation must be a proper rotation (columns closing, third, approach)"
             )
-        if not (np.isfinite(self.width) and self.width >= 0):
-            raise ValueError(f"grasp width must be a finite length >= 0 m, got {self.width}")
+        if not (np.isfinite(width) and width >= 0):
+            raise InvalidGrasp(f"grasp width must be a finite length >= 0 m, got {width}")
         object.__setattr__(self, "position", position)
         object.__setattr__(self, "rotation", rotation)
         if not (np.isnan(self.approach_width) or self.approach_width >= self.width):
-            raise ValueError(
+            raise InvalidGrasp(
                 f"grasp approach_width ({self.approach_width} m) must be at least its width "
                 f"({self.width} m)"
             )
         object.__setattr__(self, "width", float(self.width))
         object.__setattr__(self, "approach_width", float(self.approach_width))
-        object.__setattr__(self, "score", float(self.score))
+        object.__setattr__(self, "score", score)
 
     @property
     def closing_axis(self) -> NDArray[np.float64]:

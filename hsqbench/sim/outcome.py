@@ -22,10 +22,13 @@ WALL_CLOCK_FIELDS = (
 
 
 class Outcome(StrEnum):
-    """The fixed list of attempt outcomes."""
+    """The fixed list of attempt outcomes. ``planner_error``: the planner raised or returned
+    something its contract rules out (not a PlanResult, an invalid Grasp); a failed attempt of
+    that planner, as ``no_grasp_found`` is (:mod:`hsqbench.planner.failure`)."""
 
     SUCCESS = "success"
     NO_GRASP_FOUND = "no_grasp_found"
+    PLANNER_ERROR = "planner_error"
     UNREACHABLE = "unreachable"
     COLLISION_ON_APPROACH = "collision_on_approach"
     EMPTY_GRASP = "empty_grasp"

@@ -5,6 +5,8 @@ The paper's rule: a round goes on until no object is left on the table or two co
 failures. The harness adds a cap on attempts, and a round also ends when the simulation becomes
 unstable (nothing after that can be trusted). VGN and GIGA also end a round at the first attempt
 without a grasp (``stop_on_no_grasp``; off by default, so Tables II and IV share the paper's rule).
+A planner's own error (``planner_error``) is an attempt without a grasp: a failure in the count
+of consecutive failures, and where ``stop_on_no_grasp`` holds, the end of the round.
 """
 
 from __future__ import annotations
@@ -16,6 +18,9 @@ from dataclasses import dataclass
 SIM_UNSTABLE = "sim_unstable"
 SUCCESS = "success"
 NO_GRASP_FOUND = "no_grasp_found"
+PLANNER_ERROR = "planner_error"
+#: The outcomes of an attempt whose planner gave no grasp to execute.
+NO_GRASP = (NO_GRASP_FOUND, PLANNER_ERROR)
 
 
 @dataclass(frozen=True)
@@ -23,7 +28,7 @@ class PackedConfig:
     """The stop rule (``packed:`` and ``pile:`` in ``configs/trial.yaml``): stop after
     ``max_consecutive_failures`` failures in a row (the paper: two) or ``max_attempts``
     attempts (a cap that the rule reaches first in practice), and with ``stop_on_no_grasp`` at
-    the first attempt whose planner found no grasp."""
+    the first attempt whose planner found no grasp (or failed: ``planner_error``)."""
 
     max_consecutive_failures: int = 2
     max_attempts: int = 15
@@ -40,7 +45,7 @@ class PackedConfig:
             return "the table is clear"
         if outcomes and outcomes[-1] == SIM_UNSTABLE:
             return "the simulation became unstable"
-        if self.stop_on_no_grasp and outcomes and outcomes[-1] == NO_GRASP_FOUND:
+        if self.stop_on_no_grasp and outcomes and outcomes[-1] in NO_GRASP:
             return "no grasp found"
         if len(outcomes) >= self.max_attempts:
             return f"{self.max_attempts} attempts (the cap)"

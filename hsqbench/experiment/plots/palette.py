@@ -37,10 +37,12 @@ SPARE = (
 #: Hollow markers of the papers' reported rows are drawn in this colour.
 REPORTED = "#222222"
 
-#: Attempt outcomes (hsqbench.sim.outcome.Outcome) and infrastructure errors (Tableau 10).
+#: Attempt outcomes (hsqbench.sim.outcome.Outcome) and harness faults, ``error`` (Tableau 10;
+#: a planner's own error in brown, apart from the harness's black).
 OUTCOME_COLOURS = {
     "success": "#59a14f",
     "no_grasp_found": "#bab0ac",
+    "planner_error": "#9c755f",
     "unreachable": "#edc948",
     "collision_on_approach": "#e15759",
     "empty_grasp": "#f28e2b",

@@ -5,7 +5,9 @@ One attempt (:func:`run_attempt`):
 1. **Perceive** the fused cloud (the two depth cameras of :mod:`hsqbench.sim.perception`, or the
    fast :mod:`hsqbench.sim.surface_sensor` stand-in), with the arm at home, out of view.
 2. **Plan** with the planner (``PlanningContext``: table plane, ``packed``, seed, cameras,
-   workspace). No grasp: ``no_grasp_found``.
+   workspace). No grasp: ``no_grasp_found``. The planner raised, or returned what its contract
+   rules out (not a PlanResult, an invalid grasp): ``planner_error``, with the planner's file
+   and line in ``detail`` (:mod:`hsqbench.planner.failure`); a failed attempt like the first.
 3. **Motion plan** (IK, :mod:`hsqbench.sim.ik`) the grasps in score order, equal scores (the
    rolls of one closing line) with the most easily reached approach first, up to ``max_ranks``
    distinct grasps. For each grasp and its twin turned by pi about the approach axis (the same

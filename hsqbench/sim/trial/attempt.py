@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from hsqbench.planner.downsample import voxel_downsample
+from hsqbench.planner.failure import PlannerError, checked_plan
 from hsqbench.sim.motion import SimUnstable
 from hsqbench.sim.outcome import Attempt, Outcome
 from hsqbench.sim.recorded_pose import pose7
@@ -105,7 +106,7 @@ def _plan(env: TrialEnv, planner: Any, points: Any, obs: Any, truth: Any, packed
         scene=env.info.kind,
         depth_views=getattr(obs, "cameras", None),
     )
-    return planner.plan(points, context)
+    return checked_plan(planner, points, context)
 
 
 def plan_motions(env: TrialEnv, grasps: Any, points: Any, trace: AttemptTrace) -> MotionPlan:
@@ -159,7 +160,17 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
         return _finish(env, attempt, trace)
 
     t0 = time.perf_counter()
-    plan = _plan(env, planner, points, obs, truth, packed)
+    try:
+        plan = _plan(env, planner, points, obs, truth, packed)
+    except PlannerError as exc:  # the planner's own failure: a failed attempt of that planner
+        attempt = Attempt(
+            Outcome.PLANNER_ERROR,
+            perception_s=perception_s,
+            planning_s=time.perf_counter() - t0,
+            detail=str(exc),
+            **presented,
+        )
+        return _finish(env, attempt, trace)
     planning_s = time.perf_counter() - t0
     if rec.enabled:
         rec.on_plan(plan)
