@@ -138,13 +138,21 @@ ATTEMPTS: tuple[Column, ...] = (
         "not run",
     ),
     Column("n_attempts", "int", "integer", "attempts of the trial (0 on an error row)"),
-    Column("status", "text", "text", "`ok`, or `error` (the trial did not run; `detail` says why)"),
+    Column(
+        "status",
+        "text",
+        "text",
+        "`ok`, or `error` (the trial did not run: an infrastructure error, left out of GSR and "
+        "CR; `detail` says why); a planner's own error is `ok` with outcome `planner_error`",
+    ),
     Column(
         "outcome",
         "text",
         "text",
         ", ".join(f"`{o}`" for o in Outcome)
-        + " (rules: `hsqbench/sim/trial/__init__.py`); empty on an error row",
+        + " (rules: `hsqbench/sim/trial/__init__.py`); empty on an error row. `planner_error`: "
+        "the planner raised or broke its contract, a failed attempt in GSR and CR; `detail` "
+        "names the planner's file and line",
     ),
     Column("success", "bool", "`1` / `0`", "outcome is `success`"),
     Column(
