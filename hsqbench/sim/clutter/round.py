@@ -8,7 +8,8 @@ table plane and the workspace; the planner's first grasp is executed
 is taken out (cleared), the world comes to rest and objects outside the workspace are taken out
 (not cleared). The round ends (``clutter.rule``, :mod:`hsqbench.sim.stop_rule`) when no object
 is left, after two consecutive failures, or at the first step without a grasp (theirs: an
-empty cloud or no detection), which is recorded as a ``no_grasp_found`` attempt.
+empty cloud or no detection), which is recorded as a ``no_grasp_found`` attempt; a planner that
+raises or breaks its contract is a ``planner_error`` attempt, which ends the round the same way.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from hsqbench.planner.failure import PlannerError, checked_plan
 from hsqbench.sim.clutter.execution import execute_hand_grasp
 from hsqbench.sim.clutter.scenes import build_clutter_scene
 from hsqbench.sim.clutter.world import ClutterWorld
@@ -141,7 +143,13 @@ def _attempt(
         depth_views=getattr(obs, "cameras", None),
     )
     t1 = time.perf_counter()
-    plan = planner.plan(points, context)
+    try:
+        plan = checked_plan(planner, points, context)
+    except PlannerError as exc:  # the planner's own failure: a failed attempt without a grasp
+        planning_s = time.perf_counter() - t1
+        return Attempt(
+            Outcome.PLANNER_ERROR, perception_s=perception_s, planning_s=planning_s, detail=str(exc)
+        )
     planning_s = time.perf_counter() - t1
     grasps = plan.grasps
     n_top = min(len(grasps), config.recorded_scores)
