@@ -161,3 +161,30 @@ def test_the_round_stops_at_the_first_step_without_a_grasp_or_when_clear() -> No
     assert rule.stop_reason(["success", "no_grasp_found"], True) == "no grasp found"
     assert rule.stop_reason(["success", "dropped"], True) is None
     assert rule.stop_reason(["success"] * 5, False) == "the table is clear"
+
+
+def test_until_names_a_phase() -> None:
+    from hsqbench.sim.trial.execution import execute_grasp
+
+    with pytest.raises(ValueError, match="until must be one of the phases"):
+        execute_grasp(None, None, "", until="carry_on")  # type: ignore[arg-type]
+
+
+def test_the_arm_meets_the_hands_scene_shifted_onto_its_table(compiled) -> None:
+    """The bridge's first step: the same objects at the same poses in the arm's world, their
+    camera moved with them."""
+    from hsqbench.sim.clutter.arm import arm_env
+    from hsqbench.sim.trial import load_trial_config
+
+    world, box = _fresh(compiled)
+    before = world.com(box)
+    env, origin = arm_env(world, "packed", 0, load_trial_config("trial_clutter_arm"))
+    assert origin[:2] == pytest.approx([0.35, -0.15])
+    assert origin[2] == pytest.approx(env.info.table_top_z - 0.05)
+    after = env.data.xipos[env.info.object_body_ids[box]] - origin
+    assert after == pytest.approx(before, abs=0.003)  # settled again with the arm at home
+    cam = env.model.camera("clutter_cam0").id
+    eye, _ = camera_eyes(world.config.camera, 0.3)
+    assert env.data.cam_xpos[cam] - origin == pytest.approx(eye[0], abs=1e-9)
+    assert [c.name for c in env.info.depth_cameras] == ["clutter_cam0"]
+    env.close()

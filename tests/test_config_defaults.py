@@ -35,9 +35,11 @@ CLASSES = {
 #: tests/test_experiment_config.py.
 NOT_DEFAULTS = {
     "canonical",
+    "clutter_arm",
     "clutter_ring",
     "scene_resting",
     "trial_clutter",
+    "trial_clutter_arm",
     "trial_clutter_ring",
     "trial_resting",
 }

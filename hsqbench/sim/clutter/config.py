@@ -153,7 +153,18 @@ class ClutterCameraConfig:
 @dataclass(frozen=True)
 class ClutterConfig:
     """VGN/GIGA's clutter removal (``configs/clutter.yaml``), set as ``clutter:`` of a trial
-    config: its packed and pile rounds then run this protocol (:mod:`hsqbench.sim.clutter`)."""
+    config: its packed and pile rounds then run this protocol (:mod:`hsqbench.sim.clutter`).
+
+    Attributes:
+        executor: ``hand`` (theirs: the free hand) or ``arm`` (the bridge's first step: the
+            same scenes in front of the harness's Panda, executed by its arm up to the lift,
+            :mod:`hsqbench.sim.clutter.arm`).
+        arm_cube_xy_m: with ``arm``, where their workspace cube's corner lies in the arm's
+            world (x, y; its floor is the table top less ``scene.table_height_m``).
+    """
+
+    executor: Literal["hand", "arm"] = "hand"
+    arm_cube_xy_m: tuple[float, float] = (0.35, -0.15)
 
     hand: HandExecutionConfig = field(default_factory=HandExecutionConfig)
     scene: ClutterSceneConfig = field(default_factory=ClutterSceneConfig)
@@ -169,3 +180,7 @@ class ClutterConfig:
             max_consecutive_failures=2, max_attempts=15, stop_on_no_grasp=True
         )
     )
+
+    def __post_init__(self) -> None:
+        if self.executor not in ("hand", "arm"):
+            raise ConfigError(f"clutter.executor must be hand or arm, got {self.executor!r}")

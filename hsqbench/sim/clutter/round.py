@@ -79,6 +79,10 @@ def run_clutter_round(
     plan_with = resolve_planner(planner, config)
     name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
     world = build_clutter_scene(kind, objects, seed, clutter, config.robot, config.physics)
+    if clutter.executor == "arm":
+        from hsqbench.sim.clutter.arm import run_arm_round
+
+        return run_arm_round(world, kind, seed, planner, config)
     presented = [n for n in world.objects if n in world.in_play]
     streams = np.random.SeedSequence([seed, 1]).spawn(len(STREAMS))
     rngs = {n: np.random.default_rng(s) for n, s in zip(STREAMS, streams, strict=True)}

@@ -85,6 +85,8 @@ class ClutterWorld:
     table_geom: int
     wall_geoms: NDArray[np.int_]
     in_play: list[str] = field(default_factory=list)
+    #: The objects' assets by name (what the world was built from).
+    assets: dict[str, ObjectLike] = field(default_factory=dict)
     #: Wall seconds of building and generating the scene.
     build_s: float = 0.0
 
@@ -311,6 +313,7 @@ def compile_world(
         hand=FreeHand(model),
         table_geom=model.geom(TABLE).id,
         wall_geoms=walls_ids,
+        assets={a.name: a for a in assets},
     )
     for n in names:
         world.park(n)

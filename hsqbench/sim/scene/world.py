@@ -90,14 +90,17 @@ def compose_posed(
     cfg: SceneConfig,
     robot: RobotConfig | None,
     physics: PhysicsConfig,
+    scales: Sequence[float] | None = None,
 ) -> mujoco.MjSpec:
     """The scene spec with each object at a full pose (x, y, z, qw, qx, qy, qz); the robot at
-    the origin unless ``robot`` is None (a pile's drop model has no robot)."""
+    the origin unless ``robot`` is None (a pile's drop model has no robot). ``scales``: each
+    object's size scale (VGN/GIGA's scenes; default 1)."""
     spec = load_world(cfg, physics)
     spec.modelname = "hsqbench_scene"
     if robot is not None:
         spec.attach(load_panda_spec(robot), prefix=robot.prefix, frame=spec.worldbody.add_frame())
-    for asset, pose in zip(assets, poses, strict=True):
+    sizes = [1.0] * len(assets) if scales is None else list(scales)
+    for asset, pose, size in zip(assets, poses, sizes, strict=True):
         pose = np.asarray(pose, dtype=float)
         add_object_body(
             spec.worldbody,
@@ -108,6 +111,7 @@ def compose_posed(
             pose[3:],
             physics.objects,
             mass_scale=physics.object_mass_scale,
+            size_scale=float(size),
         )
     return spec
 

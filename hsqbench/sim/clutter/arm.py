@@ -1,0 +1,266 @@
+"""The bridge's first step: VGN/GIGA's round with the harness's arm instead of their free hand.
+
+Everything but the executor stays theirs: the scene is generated in their world
+(:mod:`hsqbench.sim.clutter.scenes`, the same objects, scales and poses as the hand's round of the
+same seed), then moved, at rest, into the harness's scene with the Panda, with their workspace
+cube's corner at ``arm_cube_xy_m`` on the table (the cube centred on the harness's workspace);
+their camera(s) and depth noise move with it, and their round rule, crop and workspace test
+apply. Each grasp goes through the harness's arm: its motion planning (IK over the planner's
+grasps in order, ``max_ranks`` of them; none reachable is ``unreachable``) and its execution and
+judge (:func:`hsqbench.sim.trial.execution.execute_grasp`: 10 cm pre-grasp, approach stopped and
+failed by a push, 70 N close, the lift over the bin's height), ending after the lift: an object
+still held is a success, taken out of the world, and the arm goes home. The carry to the bin is
+the bridge's later step.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from hsqbench.sim.clutter.round import STREAMS
+from hsqbench.sim.clutter.world import ClutterWorld, camera_eyes, look_at_quat
+from hsqbench.sim.motion import SimUnstable
+from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
+from hsqbench.sim.recorded_pose import pose7
+from hsqbench.sim.recorder import NullRecorder
+from hsqbench.sim.scene.info import DepthCamera
+from hsqbench.sim.scene.settled import compile_settled
+from hsqbench.sim.scene.world import compose_posed, describe_scene
+
+CAMERA_PREFIX = "clutter_cam"
+
+
+def cube_origin(world: ClutterWorld, table_top_z: float) -> np.ndarray:
+    """Their frame's origin in the arm's world."""
+    xy = world.config.arm_cube_xy_m
+    return np.array([xy[0], xy[1], table_top_z - world.config.scene.table_height_m])
+
+
+def arm_env(world: ClutterWorld, kind: str, seed: int, config: Any) -> tuple[Any, np.ndarray]:
+    """A :class:`~hsqbench.sim.trial.env.TrialEnv` of the harness's scene with the world's
+    objects in play at their poses (shifted into the arm's frame) and their camera(s); returns
+    it with their frame's origin in the arm's world."""
+    from hsqbench.sim.scene import load_world
+    from hsqbench.sim.trial.env import TrialEnv
+
+    clutter, sc = world.config, world.config.scene
+    names = [n for n in world.objects if n in world.in_play]
+    assets = [world.assets[n] for n in names]
+    probe = load_world(config.scene, config.physics).compile()
+    table_top = float(probe.geom("table").pos[2] + probe.geom("table").size[2])
+    origin = cube_origin(world, table_top)
+    poses = []
+    for n in names:
+        a = world._qadr(n)
+        pose = world.data.qpos[a : a + 7].copy()
+        pose[:3] += origin
+        poses.append(pose)
+    scales = [world.scales[n] for n in names]
+    spec = compose_posed(assets, poses, config.scene, config.robot, config.physics, scales)
+    eyes, target = camera_eyes(clutter.camera, sc.size_m)
+    for i, eye in enumerate(eyes):
+        spec.worldbody.add_camera(
+            name=f"{CAMERA_PREFIX}{i}",
+            pos=list(map(float, eye + origin)),
+            quat=list(map(float, look_at_quat(eye, target))),
+            fovy=clutter.camera.fovy_deg,
+            resolution=[clutter.camera.width_px, clutter.camera.height_px],
+        )
+    built = compile_settled(spec, names, config.robot, config.physics)
+    info = describe_scene(
+        built.model,
+        built.data,
+        config.scene,
+        config.robot,
+        kind,
+        seed,
+        names,
+        built.bodies,
+        built.body_ids,
+        built.panda,
+    )
+    cams = clutter.camera
+    info.depth_cameras = tuple(
+        DepthCamera(
+            f"{CAMERA_PREFIX}{i}",
+            cams.width_px,
+            cams.height_px,
+            cams.fovy_deg,
+            cams.min_range_m,
+            cams.max_range_m,
+        )
+        for i in range(len(eyes))
+    )
+    # Their cloud's crop (round._perception) in the arm's frame.
+    info.workspace_min = origin + np.array([0.02, 0.02, sc.table_height_m])
+    info.workspace_max = origin + np.array([sc.size_m - 0.02, sc.size_m - 0.02, sc.size_m])
+    env_config = dataclasses.replace(config, perception=clutter.perception, graspability=None)
+    env = TrialEnv(
+        built.model,
+        built.data,
+        info,
+        {a.name: a for a in assets},
+        env_config,
+        seed,
+        NullRecorder(),
+    )
+    return env, origin
+
+
+def _outside(env: Any, name: str, origin: np.ndarray, size_m: float) -> bool:
+    """Their workspace test in the arm's world (centre of mass outside the cube)."""
+    p = env.data.xipos[env.info.object_body_ids[name]] - origin
+    return bool(np.any(p < 0.0) or np.any(p > size_m))
+
+
+def _remove_and_wait(env: Any, origin: np.ndarray, world: ClutterWorld) -> list[str]:
+    """Their ``remove_and_wait`` on the arm's scene."""
+    sc = world.config.scene
+    out: list[str] = []
+    while True:
+        env.stepper.hold(sc.rest_timeout_s)
+        live = [n for n in env.info.objects if n not in env.removed]
+        gone = [n for n in live if _outside(env, n, origin, sc.size_m)]
+        if not gone:
+            return out
+        for n in gone:
+            env.remove(n)
+        out += gone
+
+
+def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, config: Any) -> Any:
+    """The round of :func:`hsqbench.sim.clutter.round.run_clutter_round` with the arm (module
+    notes); ``world`` is the generated scene of their world."""
+    from hsqbench.sim.trial.attempt import plan_motions, resolve_planner
+    from hsqbench.sim.trial.execution import execute_grasp
+    from hsqbench.sim.trial.protocols import _return_home
+
+    plan_with = resolve_planner(planner, config)
+    name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
+    presented = [n for n in world.objects if n in world.in_play]
+    env, origin = arm_env(world, kind, seed, config)
+    streams = np.random.SeedSequence([seed, 1]).spawn(len(STREAMS))
+    rngs = {n: np.random.default_rng(s) for n, s in zip(STREAMS, streams, strict=True)}
+    env.rngs.update({n: rngs[n] for n in ("perception_calibration", "perception_noise")})
+    attempts: list[Attempt] = []
+    cleared: list[str] = []
+    lost: list[str] = []
+    outcomes: list[str] = []
+    rule = world.config.rule
+    with env:
+        while rule.stop_reason(outcomes, bool(env.objects_on_table())) is None:
+            attempt = _arm_attempt(env, plan_with, kind, config, rngs, execute_grasp, plan_motions)
+            attempts.append(attempt)
+            outcomes.append(attempt.outcome.value)
+            if attempt.outcome in (Outcome.NO_GRASP_FOUND, Outcome.SIM_UNSTABLE):
+                continue
+            if attempt.outcome == Outcome.SUCCESS:
+                env.remove(attempt.target)  # taken out of the hand before it opens
+                cleared.append(attempt.target)
+            try:
+                _return_home(env)
+                gone = _remove_and_wait(env, origin, world)
+            except SimUnstable as exc:
+                attempt.detail += f"; then the simulation became unstable: {exc}"
+                break
+            lost += gone
+            for n in gone:
+                attempt.detail += f"; {n} left the workspace (taken out, not cleared)"
+    return RoundResult(
+        objects=presented,
+        seed=seed,
+        planner=name,
+        attempts=attempts,
+        objects_cleared=cleared,
+        objects_graspable=None,
+        objects_lost=lost,
+        objects_unplaced=[n for n in world.objects if n not in presented],
+    )
+
+
+def _arm_attempt(env, planner, kind, config, rngs, execute_grasp, plan_motions) -> Attempt:
+    from hsqbench.planner.api import PlanningContext
+    from hsqbench.sim.trial.attempt import AttemptTrace
+
+    t0 = time.perf_counter()
+    try:
+        look = env.look()
+    except SimUnstable as exc:
+        return Attempt(Outcome.SIM_UNSTABLE, detail=str(exc))
+    obs = look.obs
+    perception_s = time.perf_counter() - t0
+    points = np.asarray(obs.points)
+    privileged = getattr(planner, "privileged", False)
+    if len(points) < config.min_cloud_points and not privileged:
+        detail = f"the cloud has {len(points)} points (fewer than {config.min_cloud_points})"
+        return Attempt(Outcome.NO_GRASP_FOUND, perception_s=perception_s, detail=detail)
+    context = PlanningContext(
+        support_plane=tuple(float(x) for x in env.info.support_plane),
+        packed=True,
+        seed=int(rngs["planner"].integers(2**31)),
+        camera_positions=np.asarray(obs.camera_positions),
+        workspace_bounds=(obs.workspace_min, obs.workspace_max),
+        truth=look.truth if privileged else None,
+        scene=kind,
+        depth_views=getattr(obs, "cameras", None),
+    )
+    t1 = time.perf_counter()
+    plan = planner.plan(points, context)
+    planning_s = time.perf_counter() - t1
+    grasps = plan.grasps
+    n_top = min(len(grasps), config.recorded_scores)
+    common = {
+        "n_grasps": len(grasps),
+        "perception_s": perception_s,
+        "planning_s": planning_s,
+        "top_scores": tuple(float(grasps[i].score) for i in range(n_top)),
+        "planner_stages_s": {k: float(v) for k, v in plan.timings.items()},
+    }
+    if not len(grasps):
+        return Attempt(Outcome.NO_GRASP_FOUND, detail=plan.reason or "no grasp", **common)
+    trace = AttemptTrace()
+    t2 = time.perf_counter()
+    chosen = plan_motions(env, grasps, points, trace)
+    if chosen.motion is None:
+        top = grasps[0]
+        return Attempt(
+            Outcome.UNREACHABLE,
+            target=env.probe.nearest_object(env.data, np.asarray(top.position)),
+            score=float(top.score),
+            width_m=float(top.width),
+            grasp_pose=pose7(top.position, top.rotation),
+            ranks_tried=trace.ranks_tried,
+            execution_s=time.perf_counter() - t2,
+            detail=chosen.reasons[0] if chosen.reasons else "no reachable grasp",
+            **common,
+        )
+    grasp, motion = grasps[chosen.rank], chosen.motion
+    intended = env.probe.nearest_object(env.data, np.asarray(grasp.position))
+    env.panda.open_gripper(env.data)
+    mujoco.mj_forward(env.model, env.data)
+    try:
+        res = execute_grasp(env, motion, intended, until="lift")
+        outcome, target, detail = res.outcome, res.target, res.detail
+        sim_time = res.sim_time_s
+    except SimUnstable as exc:
+        outcome, target, detail, sim_time = Outcome.SIM_UNSTABLE, intended, str(exc), 0.0
+    return Attempt(
+        outcome,
+        target=target,
+        rank_executed=chosen.rank,
+        score=float(grasp.score),
+        factors={k: float(v) for k, v in grasp.factors.items()},
+        width_m=float(grasp.width),
+        execution_s=time.perf_counter() - t2,
+        grasp_pose=pose7(motion.grasp_pose.position, motion.grasp_pose.rotation),
+        grasp_flipped=motion.flipped,
+        sim_time_s=sim_time,
+        ranks_tried=trace.ranks_tried,
+        detail=detail,
+        **common,
+    )
