@@ -15,7 +15,7 @@ export PYOPENGL_PLATFORM ?= egl
 .PHONY: help install learned test test-slow lint format bench benchmark sweeps results assets clean
 
 help:
-	@echo "make benchmark   run both experiments of the paper into runs/<run>/ (CONFIG=quick ...)"
+	@echo "make benchmark   run both experiments of the paper into runs/<run>/ (PROTOCOL=quick ...)"
 	@echo "make test        run the test suite (fast checks, as CI does)"
 	@echo "make test-slow   run the slow checks too (every object of the library, long fits)"
 	@echo "make sweeps      robustness sweeps: depth noise, calibration, one camera, pad friction (runs/sweeps/)"
@@ -83,11 +83,13 @@ assets: $(STAMP)
 # (git-ignored: no command but `make results` writes a tracked file). The command builds the
 # objects the protocol uses (and downloads missing YCB ones) before the first trial.
 # Re-running continues the same run (--resume): finished trials are kept, so a killed benchmark
-# loses nothing. RUN=name starts another run; CONFIG=quick (or a YAML path) another protocol.
+# loses nothing. RUN=name starts another run; PROTOCOL=quick (or a YAML path) another protocol (CONFIG=, its
+# old name, still works for one release).
 CONFIG ?= paper
-RUN ?= $(CONFIG)
+PROTOCOL ?= $(CONFIG)
+RUN ?= $(PROTOCOL)
 benchmark: $(STAMP)
-	$(PY) -m hsqbench.cli benchmark --protocol $(CONFIG) --run $(RUN) --jobs $(JOBS) --resume
+	$(PY) -m hsqbench.cli benchmark --protocol $(PROTOCOL) --run $(RUN) --jobs $(JOBS) --resume
 	@echo "tables: runs/$(RUN)/tables.md"
 
 # The built-in robustness sweeps (configs/protocols/sweeps/) on the isolated protocol, paper and unseen

@@ -138,3 +138,41 @@ def test_every_built_in_planner_has_its_line():
 
     builtin = {n for n in planner_names() if is_builtin(n)} - set(ablation_planners())
     assert builtin <= set(DESCRIPTIONS), builtin - set(DESCRIPTIONS)
+
+
+class _Captured(Exception):
+    """Raised by a stand-in to hand back what the command passed on, before any trial runs."""
+
+
+def test_benchmark_and_ablate_take_base_seeds_and_ablate_retries_errors(tmp_path, monkeypatch):
+    import hsqbench.experiment.runner as runner
+
+    def capture(config, run_dir, **kw):
+        raise _Captured(config, kw)
+
+    monkeypatch.setattr(runner, "run_benchmark", capture)
+    run = str(tmp_path / "r")
+    with pytest.raises(_Captured) as got:
+        main(["benchmark", "--protocol", "quick", "--run", run, "--seeds", "7", "8", "--jobs", "1"])
+    assert got.value.args[0].seeds == (7, 8)
+    with pytest.raises(_Captured) as got:
+        main(["ablate", "--protocol", "quick", "--run", run, "--seeds", "9", "--jobs", "1",
+              "--additions", "caps", "--resume", "--retry-errors"])  # fmt: skip
+    config, kw = got.value.args
+    assert config.seeds == (9,) and kw["retry_errors"] and kw["resume"]
+    assert main(["ablate", "--protocol", "quick", "--run", run, "--retry-errors"]) == 2
+
+
+def test_trial_set_changes_one_value_of_the_trial_config(monkeypatch, capsys):
+    import hsqbench.sim.trial as sim_trial
+
+    def capture(obj, seed, planner, config, recorder=None):
+        raise _Captured(config)
+
+    monkeypatch.setattr(sim_trial, "run_isolated_trial", capture)
+    with pytest.raises(_Captured) as got:
+        main(["trial", "--object", "mug", "--set", "execution.lift_height_m=0.123"])
+    assert got.value.args[0].execution.lift_height_m == 0.123
+    assert main(["trial", "--object", "mug", "--set", "execution.lift_heigth_m=1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "lift_heigth_m" in err

@@ -11,6 +11,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from hsqbench.cli import CommandError, build_parser
+from hsqbench.commands.sweep import _sweeps
 from hsqbench.errors import ConfigError
 from hsqbench.experiment.results import load_results
 from hsqbench.experiment.stats import Rate
@@ -342,3 +344,74 @@ def test_isolated_points_are_paired_with_the_default_point(tmp_path, sweep):
     [low_line] = [x for x in md.splitlines() if x.startswith("| low |")]
     a_cell = low_line.split(" | ")[1]
     assert a_cell.startswith(f"{q.loc[('low', 'a'), 'gsr_percent']:.1f} (") and "; **" in a_cell
+
+
+def test_pile_points_carry_their_rates_and_pair_with_the_default(tmp_path, sweep):
+    path = tmp_path / "pile.yaml"
+    path.write_text(
+        PROTOCOL
+        + "pile: {objects: [mug, bowl, apple], rounds: 2, objects_per_round: 2, enabled: true}\n"
+    )
+    piled = replace(
+        sweep,
+        protocols=(SweepProtocol(str(path)),),
+        experiments=("pile",),
+        parameters=sweep.parameters[1:],
+    )
+    config = point_config(piled.protocols[0], piled)
+    assert config.pile.enabled and not config.isolated.enabled and not config.packed.enabled
+    run_sweep(piled, tmp_path / "sw", backend_factory=fake, progress=False)
+    q = pd.read_csv(tmp_path / "sw" / CSV_FILE).set_index(["value", "planner"])
+    assert set(q["experiment"]) == {"pile"}
+    assert q.loc[("default", "a"), "objects_presented"] == 2 * 2 * 2  # seeds x rounds x objects
+    low, default = q.loc[("low", "a")], q.loc[("default", "a")]
+    assert low["vs_default_difference_pp"] == pytest.approx(
+        low["cr_percent"] - default["cr_percent"], abs=0.01
+    )
+    assert (tmp_path / "sw" / "q.png").is_file()
+
+
+def test_the_sweep_command_takes_pile_experiments():
+    args = build_parser().parse_args(
+        ["sweep", "--param", "p", "--values", "1", "--experiments", "pile"]
+    )
+    (adhoc,) = _sweeps(args)
+    assert adhoc.experiments == ("pile",)
+
+
+def _sweep_args(root, *more):
+    return build_parser().parse_args(["sweep", "cameras", "--run", str(root), *more])
+
+
+def test_a_sweep_folder_is_continued_only_with_resume_as_a_run_folder_is(tmp_path, sweep):
+    from hsqbench.commands.sweep import _existing_sweep
+
+    root = tmp_path / "sw"
+    _existing_sweep(root, _sweep_args(root))  # nothing there yet: starts
+    one = replace(sweep, parameters=sweep.parameters[:1], seeds=(0,))
+    run_sweep(one, root, backend_factory=fake, progress=False)
+    with pytest.raises(CommandError, match="already holds a sweep: pass --resume"):
+        _existing_sweep(root, _sweep_args(root))
+    with pytest.raises(CommandError, match="--retry-errors only applies with --resume"):
+        _existing_sweep(root, _sweep_args(root, "--retry-errors"))
+    _existing_sweep(root, _sweep_args(root, "--resume", "--retry-errors"))
+    assert (root / SWEEP_FILE).is_file()
+    _existing_sweep(root, _sweep_args(root, "--force"))
+    assert not root.exists() and len(list(tmp_path.glob("sw.replaced-*"))) == 1
+
+
+def test_report_writes_a_sweep_folders_report_and_the_old_switch_still_does(
+    tmp_path, sweep, capsys
+):
+    from hsqbench.cli import main
+
+    root = tmp_path / "sw"
+    one = replace(sweep, parameters=sweep.parameters[:1], seeds=(0,))
+    run_sweep(one, root, backend_factory=fake, progress=False)
+    (root / CSV_FILE).unlink()
+    assert main(["report", "--run", str(root)]) == 0
+    assert (root / CSV_FILE).is_file() and "sweep report" in capsys.readouterr().out
+    (root / CSV_FILE).unlink()
+    assert main(["sweep", "--run", str(root), "--report-only"]) == 0
+    assert (root / CSV_FILE).is_file()
+    assert "--report-only is deprecated, use hsqbench report --run RUN" in capsys.readouterr().err

@@ -65,7 +65,6 @@ def _add_sweeps(parser: argparse.ArgumentParser) -> None:
         parser,
         "with --param: the experiments (default isolated)",
         ["isolated"],
-        choices=("isolated", "packed"),
     )
 
 

@@ -64,7 +64,15 @@ def point_config(protocol: SweepProtocol, sweep: SweepConfig) -> ExperimentConfi
         enabled=pk.enabled and "packed" in sweep.experiments,
         rounds=protocol.rounds or pk.rounds,
     )
-    if not (isolated.enabled or packed.enabled):
+    pile = base.pile
+    if pile.enabled or "pile" in sweep.experiments:  # untouched otherwise: the runs' hashes stay
+        pile = replace(
+            pile,
+            exclude=(),
+            enabled=pile.enabled and "pile" in sweep.experiments,
+            rounds=protocol.rounds or pile.rounds,
+        )
+    if not (isolated.enabled or packed.enabled or pile.enabled):
         raise ValueError(
             f"protocol {protocol.config!r} enables none of the sweep's experiments "
             f"{list(sweep.experiments)}"
@@ -75,6 +83,7 @@ def point_config(protocol: SweepProtocol, sweep: SweepConfig) -> ExperimentConfi
         seeds=protocol.seeds or sweep.seeds,
         isolated=isolated,
         packed=packed,
+        pile=pile,
     )
 
 

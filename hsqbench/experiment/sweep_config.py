@@ -102,7 +102,7 @@ class SweepProtocol:
         config: protocol config (``paper``, ``ycb`` or a path); its objects and trial config.
         attempts_per_object: isolated attempts per object and base seed at every point
             (None: the protocol's own).
-        rounds: packed rounds per base seed at every point (None: the protocol's own).
+        rounds: packed (and pile) rounds per base seed at every point (None: the protocol's own).
         seeds: base seeds on this protocol (None: the sweep's), so a small protocol can spread
             its attempts over three seeds while a large one runs one.
     """
@@ -134,7 +134,7 @@ class SweepConfig:
 
     Attributes:
         protocols: where the parameters are stepped (each point runs on every protocol).
-        experiments: which of the protocols' experiments run (``isolated``, ``packed``).
+        experiments: which of the protocols' experiments run (``isolated``, ``packed``, ``pile``).
         planners: the planners (optional ones whose extra is missing are left out with a note).
         seeds: base seeds; every point runs the same trials (same poses), so points differ only
             by their settings. More seeds repeat the protocol on fresh poses.

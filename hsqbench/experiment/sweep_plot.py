@@ -1,5 +1,5 @@
 """A sweep parameter's plot: the rate against the point, a line per planner with its Wilson
-band; one panel per protocol and rate (isolated GSR; packed GSR and CR)."""
+band; one panel per protocol and rate (isolated GSR; packed and pile GSR and CR)."""
 
 from __future__ import annotations
 
@@ -23,6 +23,8 @@ RATES = (
     ("isolated", "gsr", "isolated GSR"),
     ("packed", "gsr", "packed GSR"),
     ("packed", "cr", "packed CR"),
+    ("pile", "gsr", "pile GSR"),
+    ("pile", "cr", "pile CR"),
 )
 
 
