@@ -48,16 +48,16 @@ def quick_run(plugin, tmp_path_factory):
         config, planners = protocol_planners(load_experiment_config("quick"), names)
         run_dir = tmp_path_factory.mktemp("runs") / "broken"
         backend = SimBackend(config.trial_config, overrides=FAST)
-        run_benchmark(config, run_dir, backend=backend, planners=names, progress=False)
+        summary = run_benchmark(config, run_dir, backend=backend, planners=names, progress=False)
     assert set(names) <= set(planners)
     with (run_dir / "attempts.csv").open(newline="") as f:
         rows = list(csv.DictReader(f))
-    return load_run(run_dir), rows
+    return load_run(run_dir), rows, summary
 
 
 @pytest.mark.parametrize("planner", ["raises", "nan-pose"])
 def test_a_broken_planner_scores_zero_over_all_its_attempts(quick_run, planner):
-    data, rows = quick_run
+    data, rows, _ = quick_run
     mine = [r for r in rows if r["planner"] == planner]
     assert mine and all(r["status"] == "ok" for r in mine), [r["detail"] for r in mine]
     assert {r["outcome"] for r in mine} == {"planner_error"}
@@ -75,7 +75,7 @@ def test_a_broken_planner_scores_zero_over_all_its_attempts(quick_run, planner):
 
 
 def test_a_nan_grasp_names_the_plugins_line_not_the_grasp_checks(quick_run, plugin):
-    _, rows = quick_run
+    _, rows, _ = quick_run
     for r in (r for r in rows if r["planner"] == "nan-pose"):
         assert line_of(plugin, "nan-pose") in r["detail"] and "grasp.py" not in r["detail"]
         assert "grasp position and rotation must be finite" in r["detail"]
@@ -87,7 +87,7 @@ def test_the_report_counts_planner_errors_apart_from_infrastructure_errors(quick
     from hsqbench.experiment.markdown import render_markdown
     from hsqbench.experiment.report import table1_per_object, time_table
 
-    data, _ = quick_run
+    data, _, _ = quick_run
     t1, t2 = table1(data), table2(data)
     md = render_markdown(
         data, t1, table1_per_object(data), t2, outcome_table(data), time_table(data)
@@ -95,6 +95,12 @@ def test_the_report_counts_planner_errors_apart_from_infrastructure_errors(quick
     assert " | ".join(ERROR_HEADS) in md
     line = next(x for x in md.splitlines() if x.startswith("| raises |"))
     assert line.endswith("| 0/2 | 2 | 0 | measured, simulation (this run) |"), line
+
+
+def test_the_runs_summary_counts_planner_errors_apart_from_infrastructure_errors(quick_run, plugin):
+    _, rows, summary = quick_run
+    assert summary.errors == 0 and summary.planner_errors == len(rows) > 0
+    assert line_of(plugin, "raises") in summary.first_planner_error
 
 
 @pytest.mark.parametrize(("cls", "name"), [("Raises", "raises"), ("Listed", "listed")])

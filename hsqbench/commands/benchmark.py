@@ -213,11 +213,21 @@ def _run_trials(
 
 def print_summary(run_dir: Path, summary: RunSummary, report: bool) -> None:
     """The run's one-line summary, then its tables and plots unless ``report`` is False (shared
-    by ``benchmark`` and ``ablate``)."""
+    by ``benchmark`` and ``ablate``); a note on stderr when attempts ended in their planner's
+    own error."""
+    import sys
+
     print(
         f"{run_dir}: {summary.selected} trials selected, {summary.skipped} already done, "
         f"{summary.ran} run, {summary.errors} errors (config hash {summary.config_hash})"
     )
+    if summary.planner_errors:  # failed attempts of their planner, counted in the rates
+        print(
+            f"{summary.planner_errors} attempt(s) ended in the planner's own error "
+            f"(planner_error, counted as failures; attempts.csv detail), the first: "
+            f"{summary.first_planner_error}",
+            file=sys.stderr,
+        )
     if report:
         from hsqbench.experiment.report import write_report
 

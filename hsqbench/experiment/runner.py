@@ -32,6 +32,7 @@ from hsqbench.experiment.rows import attempts_paths, packed_files
 from hsqbench.experiment.seeds import TrialSpec, build_trials
 from hsqbench.planner.registry import planner_sources
 from hsqbench.settings import code_version
+from hsqbench.sim.outcome import Outcome
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,10 @@ class RunIdentity:
 
 @dataclass
 class RunSummary:
-    """What one invocation did. ``selected`` = skipped (already recorded) + ran."""
+    """What one invocation did. ``selected`` = skipped (already recorded) + ran; ``errors``:
+    trials that failed with an infrastructure error; ``planner_errors``: attempts that ended in
+    the planner's own error (failed attempts, in the rates), the first one's detail in
+    ``first_planner_error``."""
 
     run_dir: Path
     config_hash: str
@@ -52,7 +56,12 @@ class RunSummary:
     skipped: int
     ran: int = 0
     errors: int = 0
+    planner_errors: int = 0
+    first_planner_error: str = ""
     interrupted: bool = False
+
+
+PLANNER_ERROR = str(Outcome.PLANNER_ERROR)
 
 
 def _now() -> str:
@@ -378,6 +387,9 @@ def _run_pending(
             rows = store.append(trial_run, summary.config_hash, version)
             summary.ran += 1
             summary.errors += not trial_run.ok
+            broken = [r["detail"] for r in rows if r["outcome"] == PLANNER_ERROR]
+            summary.planner_errors += len(broken)
+            summary.first_planner_error = summary.first_planner_error or next(iter(broken), "")
             tally.add(rows)
             if shown is not None:
                 shown.update()
