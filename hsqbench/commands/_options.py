@@ -36,7 +36,7 @@ PLANNER_SPEC_HELP = (
     "path/to/file.py:Name"
 )
 
-RUN_HELP = "a run folder: a name under runs/ or a path"
+RUN_HELP = "a name under runs/ or a folder path"
 
 
 def _note(old: str, new: str) -> None:

@@ -32,7 +32,7 @@ HELP = "run a protocol with hsq, hsq-paper and hsq with each of our additions of
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_protocol(parser)
-    add_run(parser, f"{RUN_HELP}; default ablate-<protocol>-<UTC time>")
+    add_run(parser, f"the run folder: {RUN_HELP} (default ablate-<protocol>-<UTC time>)")
     parser.add_argument(
         "--additions",
         nargs="+",

@@ -32,7 +32,7 @@ HELP = "run the experiments of a benchmark protocol with its planners (or yours)
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_protocol(parser)
-    add_run(parser, f"{RUN_HELP}; default <protocol>-<UTC time>")
+    add_run(parser, f"the run folder: {RUN_HELP} (default <protocol>-<UTC time>)")
     add_jobs(parser)
     add_executor(parser)
     add_planners(
@@ -58,8 +58,8 @@ def _add_rerun_arguments(parser: argparse.ArgumentParser) -> None:
     add_output(
         parser,
         "rerun",
-        "after the run, record trials for Rerun into DIR, one .rrd each (replayed from their "
-        "seeds)",
+        "after the run, record trials for Rerun into the folder PATH, one .rrd each (replayed "
+        "from their seeds)",
         dest="rerun_dir",
     )
     deprecated(parser, "--rerun-dir", "--rerun", "rerun_dir", type=Path)

@@ -20,7 +20,7 @@ HELP = "compare two runs of one protocol trial by trial: paired differences and 
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("run_a", type=as_path, metavar="A", help=f"the baseline run: {RUN_HELP}")
+    parser.add_argument("run_a", type=as_path, metavar="A", help=f"the baseline run ({RUN_HELP})")
     parser.add_argument("run_b", type=as_path, metavar="B", help="the run to judge against it")
     add_planners(parser, "only these planners")
     parser.add_argument(

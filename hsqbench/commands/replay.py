@@ -46,7 +46,7 @@ input.
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = _EPILOG
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
-    add_run(parser, f"the benchmark run to replay: {RUN_HELP}", reads=True, positional_alias=True)
+    add_run(parser, f"the benchmark run to replay ({RUN_HELP})", reads=True, positional_alias=True)
     parser.add_argument(
         "--trial",
         action="append",

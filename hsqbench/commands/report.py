@@ -16,7 +16,7 @@ HELP = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_run(
         parser,
-        f"the run to report, e.g. runs/paper-20250101: {RUN_HELP}",
+        f"the run or sweep folder to report ({RUN_HELP})",
         reads=True,
         positional_alias=True,
         dest="run_dir",

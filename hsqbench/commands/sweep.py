@@ -86,7 +86,7 @@ def _add_scope(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--only", nargs="+", default=None, metavar="PARAM", help="run only these parameters"
     )
-    add_run(parser, f"the sweep folder: {RUN_HELP} (default runs/sweeps)", default="sweeps")
+    add_run(parser, f"the sweep folder ({RUN_HELP}; default runs/sweeps)", default="sweeps")
 
 
 def _add_execution(parser: argparse.ArgumentParser) -> None:
