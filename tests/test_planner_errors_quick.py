@@ -103,6 +103,14 @@ def test_the_runs_summary_counts_planner_errors_apart_from_infrastructure_errors
     assert line_of(plugin, "raises") in summary.first_planner_error
 
 
+def test_a_benchmark_refuses_a_plugin_that_cannot_be_built_before_any_trial(plugin, monkeypatch):
+    monkeypatch.setattr(registry, "_SPECS", {})
+    monkeypatch.setattr(registry, "_FACTORIES", dict(registry._FACTORIES))
+    name = registry.resolve_planner(f"{plugin}:BadInit")
+    with pytest.raises(ValueError, match=f"cannot be built: OSError at {line_of(plugin, name)}"):
+        SimBackend().check((name,))
+
+
 @pytest.mark.parametrize(("cls", "name"), [("Raises", "raises"), ("Listed", "listed")])
 def test_trial_prints_one_line_and_exits_2(plugin, capsys, monkeypatch, cls, name):
     monkeypatch.setattr(registry, "_SPECS", {})

@@ -91,6 +91,16 @@ class Dicts(PlannerBase):
         return PlanResult(grasps=[{"position": _centre(clean)}])
 
 
+class BadInit(PlannerBase):
+    name = "bad-init"
+
+    def __init__(self, config=None):
+        raise OSError("weights.pt not found")  # LINE bad-init
+
+    def stages(self, clean, context):
+        return PlanResult(grasps=[])
+
+
 class NoBase:
     name = "no-base"
 
@@ -120,6 +130,7 @@ CLASSES = {
     "listed": "Listed",
     "dicts": "Dicts",
     "no-base": "NoBase",
+    "bad-init": "BadInit",
 }
 
 
@@ -159,6 +170,20 @@ def test_each_broken_contract_is_one_line_naming_the_plugins_line(broken, name):
     assert where in message, message
     assert BROKE[name].format(where=where) in message
     assert "grasp.py" not in message and "docs/your-own-planner.md" in message
+
+
+def test_a_plugin_that_cannot_be_built_names_its_line(broken, tmp_path, capsys):
+    name = registry.resolve_planner(f"{broken}:BadInit")
+    with pytest.raises(ValueError) as caught:
+        registry.get_planner(name)
+    message = str(caught.value)
+    assert message.startswith("planner ") and "cannot be built: OSError at " in message
+    assert line_of(broken, "bad-init") in message and "weights.pt not found" in message
+    cloud = tmp_path / "cloud.npy"
+    np.save(cloud, _cloud())
+    assert main(["plan", str(cloud), "--planner", f"{broken}:BadInit"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and line_of(broken, "bad-init") in err
 
 
 def test_an_invalid_grasp_is_a_value_error_of_its_own():

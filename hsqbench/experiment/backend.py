@@ -293,12 +293,16 @@ class SimBackend:
         unknown = [p for p in planners if p not in known]
         if unknown:
             raise ValueError(f"unknown planner(s) {unknown}; known: {sorted(known)}")
-        from hsqbench.planner.registry import unavailable
+        from hsqbench.planner.registry import get_planner, is_builtin, unavailable
 
         for p in planners:
             why = unavailable(p)
             if why is not None:
                 raise ValueError(f"planner {p!r} cannot run: {why}")
+        tc = self._trial_config()
+        for p in planners:
+            if not is_builtin(p):  # a plugin that cannot be built says so once, before any trial
+                get_planner(p, tc.planners.for_planner(p))
 
     def prepare(self, objects: tuple[str, ...], jobs: int | None, progress: bool) -> dict[str, str]:
         """Download the YCB ones missing from the download folder (only when ``HSQ_YCB_DIR`` is

@@ -55,10 +55,12 @@ def _shown(path: str) -> str:
     return path if rel.startswith("..") else rel
 
 
-def _code_root(planner: Any) -> str | None:
-    """The planner's own code: its top-level package's folder, or its module's file."""
-    module = sys.modules.get(type(planner).__module__)
-    top = sys.modules.get(type(planner).__module__.partition(".")[0], module)
+def _code_root(owner: Any) -> str | None:
+    """The code of ``owner`` (a planner, its class or its factory function): its top-level
+    package's folder, or its module's file."""
+    name = str(getattr(owner, "__module__", None) or type(owner).__module__)
+    module = sys.modules.get(name)
+    top = sys.modules.get(name.partition(".")[0], module)
     file = getattr(top, "__file__", None)
     if not file:
         return None
@@ -73,10 +75,11 @@ def _own(filename: str, root: str | None) -> bool:
     return path == root or path.startswith(root + os.sep)
 
 
-def location(exc: BaseException, planner: Any) -> str:
+def location(exc: BaseException, planner: Any, own_only: bool = False) -> str | None:
     """``file:line`` of the planner's code where ``exc`` happened: the deepest frame in the
-    planner's own files (else the deepest frame), skipping, for an invalid grasp, the
-    :class:`Grasp` checks themselves so that the line that built the grasp is named."""
+    planner's own files (else the deepest frame, or None with ``own_only``), skipping, for an
+    invalid grasp, the :class:`Grasp` checks themselves so that the line that built the grasp
+    is named. ``planner``: the planner, its class or its factory function."""
     frames = list(traceback.extract_tb(exc.__traceback__))
     if isinstance(exc, InvalidGrasp):
         while frames and (
@@ -86,8 +89,10 @@ def location(exc: BaseException, planner: Any) -> str:
             frames.pop()
     root = _code_root(planner)
     own = [f for f in frames if _own(f.filename, root)]
-    frame = own[-1] if own else (frames[-1] if frames else None)
-    return "an unknown line" if frame is None else f"{_shown(frame.filename)}:{frame.lineno}"
+    frame = own[-1] if own else (None if own_only or not frames else frames[-1])
+    if frame is None:
+        return None if own_only else "an unknown line"
+    return f"{_shown(frame.filename)}:{frame.lineno}"
 
 
 def _method_location(planner: Any, method: str) -> str:

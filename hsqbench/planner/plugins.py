@@ -170,16 +170,22 @@ def _distribution(module: str) -> tuple[str | None, str | None]:
 
 def factory(obj: Any, label: str):
     """A registry factory ``(config=None) -> planner`` for a planner class or function ``obj``;
-    building errors (an abstract method left out, a bad constructor) become a PluginError
-    naming the planner."""
+    building errors (an abstract method left out, a constructor that raises) become a
+    PluginError naming the planner and, where its code raised, the file and line."""
     if not callable(obj):
         raise PluginError(f"planner {label}: {obj!r} is neither a planner class nor a function")
 
     def build(config: Any = None) -> Any:
         try:
             planner = obj() if config is None else obj(config)
-        except TypeError as exc:
-            raise PluginError(f"planner {label} cannot be built: {exc}") from exc
+        except MemoryError:
+            raise
+        except Exception as exc:  # the plugin's constructor: one line, at its own line
+            from hsqbench.planner.failure import location, one_line
+
+            where = location(exc, obj, own_only=True)
+            what = f"{type(exc).__name__} at {where}: {exc}" if where else str(exc)
+            raise PluginError(one_line(f"planner {label} cannot be built: {what}")) from exc
         if not callable(getattr(planner, "plan", None)):
             raise PluginError(
                 f"planner {label}: {type(planner).__name__} has no plan(points, context) method "
