@@ -64,10 +64,11 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    from hsqbench.commands._options import check_required
+    from hsqbench.commands._options import check_outputs, check_required
 
     check_required(args)  # options that also have an old positional spelling
     try:
+        check_outputs(args)  # every path the command writes, before it starts
         return int(args._run(args) or 0)
     except Exception as exc:
         if not isinstance(exc, user_errors()):

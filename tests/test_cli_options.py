@@ -97,6 +97,27 @@ def test_a_benchmark_resumed_with_other_planners_says_which_to_give(tmp_path, ca
     assert "resume it with --planners hsq topdown" in capsys.readouterr().err
 
 
+def test_a_resume_refusal_names_the_planners_the_run_holds(tmp_path, capsys):
+    """A run of `--planners toppick` on a protocol of hsq: its planner list is hsq, toppick,
+    but it holds toppick's trials only, and --planners toppick resumes it."""
+    from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig
+    from hsqbench.experiment.runner import run_benchmark
+    from tests.fake_backend import FakeBackend
+
+    run = tmp_path / "r"
+    config = ExperimentConfig(
+        planners=("hsq", "toppick"), isolated=IsolatedConfig(objects=("mug",))
+    )
+    run_benchmark(config, run, backend=FakeBackend(), planners=["toppick"], progress=False)
+    argv = ["benchmark", "--protocol", "quick", "--run", str(run), "--resume"]
+    assert main([*argv, "--planners", "antipodal"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert f"{run} holds trials of toppick (planner list hsq, toppick)" in err
+    assert "this command runs antipodal (planner list hsq, antipodal)" in err
+    assert err.endswith("resume it with --planners toppick (or start another --run)")
+
+
 def test_planners_lists_each_planner_on_one_line(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(network, "available", lambda: False)
     spec = tmp_path / "mine.py"

@@ -180,6 +180,8 @@ def add_run(
     parser.add_argument(
         "--run", dest=dest, type=kind, default=default, metavar="RUN", help=help_text
     )
+    if not reads:
+        register_output(parser, dest, "--run", folder=True, resolve=_run_written)
     if positional_alias:
         parser.add_argument(
             dest,
@@ -353,3 +355,52 @@ def add_output(
         metavar="DIR" if folder else "PATH",
         help=help_text,
     )
+    extension = {"rerun": "rrd"}.get(fmt, fmt)
+    register_output(
+        parser,
+        dest or fmt,
+        f"--{fmt}",
+        folder=folder,
+        example=f"out.{extension}",
+        suffix=".png" if fmt == "png" else "",  # the image writer picks the format by it
+    )
+
+
+def register_output(
+    parser: argparse.ArgumentParser,
+    dest: str,
+    option: str,
+    *,
+    folder: bool,
+    example: str = "",
+    suffix: str = "",
+    resolve: Any = None,
+) -> None:
+    """Mark ``dest`` as a path the command writes: :func:`check_outputs` checks it before the
+    command starts (``resolve`` turns the value into the path written, e.g. a run name)."""
+    outputs = dict(parser.get_default("_outputs") or {})
+    outputs[dest] = (option, folder, example, suffix, resolve)
+    parser.set_defaults(_outputs=outputs)
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Every output path of the command line, before any work (:mod:`hsqbench.outputs`).
+
+    Raises:
+        OutputPathError: one that cannot be written as asked.
+    """
+    from hsqbench.outputs import check_output
+
+    outputs = getattr(args, "_outputs", None) or {}
+    for dest, (option, folder, example, suffix, resolve) in outputs.items():
+        value = getattr(args, dest, None)
+        if value is not None:
+            path = resolve(value) if resolve is not None else value
+            check_output(path, folder=folder, option=option, example=example, suffix=suffix)
+
+
+def _run_written(value: str) -> Path:
+    """The folder a writing command's ``--run`` names (a name goes under runs/)."""
+    from hsqbench.runs import run_folder
+
+    return run_folder(value, "")

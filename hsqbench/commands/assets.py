@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from hsqbench.commands._options import add_jobs, add_protocol, deprecated
+from hsqbench.commands._options import add_jobs, add_protocol, deprecated, register_output
 
 HELP = "list, build, download (YCB, CC BY 4.0) or import the objects of the library"
 
@@ -97,6 +97,7 @@ def _add_download(sub: argparse._SubParsersAction) -> None:
         metavar="DIR",
         help="folder to write, then export HSQ_YCB_DIR=DEST (default: the download folder)",
     )
+    register_output(p, "dest", "--dest", folder=True)
     p.add_argument(
         "--base-url",
         default=None,

@@ -21,6 +21,7 @@ from hsqbench.commands._options import (
     deprecated,
     positive_int,
     protocol_of,
+    register_output,
 )
 
 if TYPE_CHECKING:
@@ -63,6 +64,7 @@ def _add_rerun_arguments(parser: argparse.ArgumentParser) -> None:
         dest="rerun_dir",
     )
     deprecated(parser, "--rerun-dir", "--rerun", "rerun_dir", type=Path)
+    register_output(parser, "rerun_dir", "--rerun", folder=True)  # a folder, though named PATH
     parser.add_argument(
         "--rerun-which",
         choices=("failures", "all"),
@@ -113,12 +115,13 @@ def run(args: argparse.Namespace) -> int:
     if args.resume and args.run is None:
         raise CommandError("--resume needs --run RUN (the run to continue)")
     protocol = args.protocol = protocol_of(args)
-    config, planners = protocol_planners(load_experiment_config(protocol), args.planners)
+    own = load_experiment_config(protocol)
+    config, planners = protocol_planners(own, args.planners)
     if args.seeds is not None:
         config = dataclasses.replace(config, seeds=tuple(args.seeds))
     run_dir = run_folder(args.run, protocol)
     if args.resume:
-        _check_resumed_planners(run_dir, config.planners)
+        _check_resumed_planners(run_dir, config.planners, own.planners, planners)
     executor = make_executor(args.executor, args.jobs, args.address)
     print(f"run folder: {run_dir}", file=sys.stderr)
     try:
@@ -152,8 +155,12 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_resumed_planners(run_dir: Path, planners: tuple[str, ...]) -> None:
-    """A resumed run keeps its planner list: say which --planners give it back."""
+def _check_resumed_planners(
+    run_dir: Path, planners: tuple[str, ...], own: tuple[str, ...], named: list[str]
+) -> None:
+    """A resumed run keeps its planner list (the protocol's own, ``own``, and those its
+    ``--planners`` added): refuse another, naming the planners the run holds trials of and the
+    ``--planners`` that resume it (those, and any added one that has not run yet)."""
     import json
 
     from hsqbench.cli import CommandError
@@ -161,16 +168,32 @@ def _check_resumed_planners(run_dir: Path, planners: tuple[str, ...]) -> None:
     path = run_dir / "run.json"
     if not path.is_file():
         return
-    recorded = tuple(json.loads(path.read_text()).get("config", {}).get("planners", ()))
-    if recorded and recorded != planners:
-        sources = json.loads(path.read_text()).get("backend", {}).get("planner_sources", {})
-        given = [
-            sources[p]["spec"] if sources.get(p, {}).get("kind") == "file" else p for p in recorded
-        ]
-        raise CommandError(
-            f"{run_dir} was started with the planners {list(recorded)}, this command names "
-            f"{list(planners)}; resume it with --planners {' '.join(given)} (or start another --run)"
-        )
+    meta = json.loads(path.read_text())
+    recorded = tuple(meta.get("config", {}).get("planners", ()))
+    if not recorded or recorded == planners:
+        return
+    held = _held_planners(run_dir, meta) or set(recorded)
+    holds = [p for p in recorded if p in held] + sorted(held - set(recorded))
+    sources = meta.get("backend", {}).get("planner_sources", {})
+    given = [
+        sources[p]["spec"] if sources.get(p, {}).get("kind") == "file" else p
+        for p in recorded
+        if p in held or p not in own
+    ]
+    how = f"--planners {' '.join(given)}" if given else "no --planners"
+    raise CommandError(
+        f"{run_dir} holds trials of {', '.join(holds)} (planner list {', '.join(recorded)}); "
+        f"this command runs {', '.join(named)} (planner list {', '.join(planners)}): resume it "
+        f"with {how} (or start another --run)"
+    )
+
+
+def _held_planners(run_dir: Path, meta: dict[str, Any]) -> set[str]:
+    """The planners ``run_dir`` holds finished trials of, else those its sessions ran."""
+    from hsqbench.experiment.results import load_results
+
+    held = {r["planner"] for r in load_results(run_dir).attempts}
+    return held or {p for s in meta.get("sessions", []) for p in s.get("planners", [])}
 
 
 def _run_trials(

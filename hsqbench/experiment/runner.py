@@ -30,6 +30,7 @@ from hsqbench.experiment.results import (
 )
 from hsqbench.experiment.rows import attempts_paths, packed_files
 from hsqbench.experiment.seeds import TrialSpec, build_trials
+from hsqbench.outputs import check_output
 from hsqbench.planner.registry import planner_sources
 from hsqbench.settings import code_version
 from hsqbench.sim.outcome import Outcome
@@ -143,13 +144,14 @@ def run_benchmark(
         retry_errors: when resuming, run again the trials recorded as errors.
 
     Raises:
+        OutputPathError: ``run_dir`` cannot be a folder written by this user (a file, ...).
         ResultsError: the folder holds another config's run, or exists without ``resume``, or
             a packed round now draws other objects than recorded in ``run.json``.
         PackedDrawError: a packed round has no placeable draw within ``packed.max_draws``.
         TrialRunnerUnavailable: the default backend cannot import the trial runner.
         KeyboardInterrupt: re-raised after recording the interruption; rows written so far stay.
     """
-    run_dir = Path(run_dir)
+    run_dir = check_output(run_dir, folder=True, option="run folder")  # before any work
     backend = backend if backend is not None else SimBackend(config.trial_config)
     executor = executor if executor is not None else SerialExecutor()
     store = ResultStore(run_dir)
