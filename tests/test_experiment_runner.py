@@ -205,7 +205,7 @@ def test_benchmark_command_argument_errors(tmp_path, capsys) -> None:
     from hsqbench.cli import main
 
     assert main(["benchmark", "--resume"]) == 2
-    assert "--run NAME" in capsys.readouterr().err
+    assert "--run RUN" in capsys.readouterr().err
     assert main(["benchmark", "--retry-errors", "--run", str(tmp_path / "x")]) == 2
     assert "--resume" in capsys.readouterr().err
     assert main(["benchmark", "--protocol", "nope", "--run", str(tmp_path / "x")]) == 2
