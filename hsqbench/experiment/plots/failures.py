@@ -1,6 +1,7 @@
 """How attempts end, per planner: a horizontal bar of outcome fractions (summing to 1 over the
-planner's attempts), a panel per experiment. Trials that failed with an infrastructure error
-are not attempts: they are counted in the panel's title, not in the bars."""
+planner's attempts), a panel per experiment. A planner's own error (``planner_error``) is one
+of its attempts, a bar segment like any failure; trials that failed with an infrastructure
+error are not attempts: they are counted in the panel's title, not in the bars."""
 
 from __future__ import annotations
 
