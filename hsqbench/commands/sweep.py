@@ -234,7 +234,10 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
-    print(f"sweep: {root / 'sweep.csv'} and one PNG per parameter in {root}")
+    if args.no_report:
+        print(f"sweep: runs in {root} (its report: hsqbench report --run {root})")
+    else:
+        print(f"sweep: {root / 'sweep.csv'} and one PNG per parameter in {root}")
     if errors:
         print(
             f"{errors} trial(s) failed with an infrastructure error; rerun with --resume "
