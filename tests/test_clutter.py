@@ -188,3 +188,17 @@ def test_the_arm_meets_the_hands_scene_shifted_onto_its_table(compiled) -> None:
     assert env.data.cam_xpos[cam] - origin == pytest.approx(eye[0], abs=1e-9)
     assert [c.name for c in env.info.depth_cameras] == ["clutter_cam0"]
     env.close()
+
+
+def test_the_second_step_sees_with_the_harness_cameras(compiled) -> None:
+    from hsqbench.sim.clutter.arm import arm_env
+    from hsqbench.sim.trial import load_trial_config
+
+    world, _ = _fresh(compiled)
+    config = load_trial_config("trial_clutter_arm_cameras")
+    world.config = config.clutter
+    env, _ = arm_env(world, "packed", 0, config)
+    assert [c.name for c in env.info.depth_cameras] == ["cam_left", "cam_right"]
+    assert env.config.perception == config.perception  # tof+calibration, not their dex noise
+    assert load_trial_config("trial_clutter_arm_bin").clutter.arm_until == "release"
+    env.close()

@@ -36,10 +36,14 @@ CLASSES = {
 NOT_DEFAULTS = {
     "canonical",
     "clutter_arm",
+    "clutter_arm_bin",
+    "clutter_arm_cameras",
     "clutter_ring",
     "scene_resting",
     "trial_clutter",
     "trial_clutter_arm",
+    "trial_clutter_arm_bin",
+    "trial_clutter_arm_cameras",
     "trial_clutter_ring",
     "trial_resting",
 }

@@ -72,3 +72,45 @@ def test_run_totals_follow_the_cut_rounds(tmp_path: Path) -> None:
     assert 0 <= row["dr_vs_reference_p"] <= row["dr_vs_reference_p_holm"] <= 1
     lines = render_clutter(load_run(run_dir), table.reset_index())
     assert any(x.startswith("| packed | antipodal |") for x in lines)
+
+
+def test_vgn_percent_cleared_leaves_out_rounds_without_a_grasp() -> None:
+    """Two rounds counted by hand: A (5 objects) S S F S F F; B (4 objects) ends at once with no
+    grasp. GIGA: GSR 3/6, declutter 3/9; VGN's percent_cleared joins rounds to their grasps, so B
+    drops out: 3/5."""
+    import types
+
+    import pandas as pd
+
+    outcomes = {
+        "packed/p/s0/round/000": ["success", "success", "empty_grasp", "success", "dropped",
+                                  "empty_grasp"],
+        "packed/p/s0/round/001": ["no_grasp_found"],
+    }  # fmt: skip
+    attempts = pd.DataFrame(
+        [
+            {"trial_key": k, "attempt_index": i, "outcome": o, "success": int(o == "success"),
+             "status": "ok", "planner": "p"}
+            for k, os in outcomes.items()
+            for i, o in enumerate(os)
+        ]
+    )  # fmt: skip
+    rounds = pd.DataFrame(
+        {
+            "trial_key": list(outcomes),
+            "planner": ["p", "p"],
+            "base_seed": [0, 0],
+            "trial_index": [0, 1],
+            "objects": ["a;b;c;d;e", "f;g;h;i"],
+            "n_objects": [5, 4],
+            "n_cleared": [3, 0],
+            "status": ["ok", "ok"],
+        }
+    )
+    data = types.SimpleNamespace(attempts=attempts, rounds=rounds, planners=["p"], confidence=0.95)
+    row = clutter_table(data).iloc[0]
+    assert (row["vgn_successes"], row["vgn_attempts"], row["rounds_cut"]) == (3, 6, 1)
+    assert row["vgn_gsr_percent"] == pytest.approx(50.0)
+    assert row["declutter_percent"] == pytest.approx(100 * 3 / 9)
+    assert row["vgn_percent_cleared"] == pytest.approx(60.0)
+    assert row["our_gsr_percent"] == pytest.approx(100 * 3 / 7)

@@ -9,8 +9,12 @@ apply. Each grasp goes through the harness's arm: its motion planning (IK over t
 grasps in order, ``max_ranks`` of them; none reachable is ``unreachable``) and its execution and
 judge (:func:`hsqbench.sim.trial.execution.execute_grasp`: 10 cm pre-grasp, approach stopped and
 failed by a push, 70 N close, the lift over the bin's height), ending after the lift: an object
-still held is a success, taken out of the world, and the arm goes home. The carry to the bin is
-the bridge's later step.
+still held is a success, taken out of the world, and the arm goes home.
+
+The bridge's next steps are switches of ``clutter``: ``arm_sensing: harness`` puts the trial
+config's own two depth cameras and their noise and calibration error in place of their camera
+(their crop kept), and ``arm_until: release`` runs the execution to its end (the carry to the
+bin and the release; success is the harness's, the object at rest in the bin).
 """
 
 from __future__ import annotations
@@ -85,21 +89,24 @@ def arm_env(world: ClutterWorld, kind: str, seed: int, config: Any) -> tuple[Any
         built.panda,
     )
     cams = clutter.camera
-    info.depth_cameras = tuple(
-        DepthCamera(
-            f"{CAMERA_PREFIX}{i}",
-            cams.width_px,
-            cams.height_px,
-            cams.fovy_deg,
-            cams.min_range_m,
-            cams.max_range_m,
+    if clutter.arm_sensing == "theirs":
+        info.depth_cameras = tuple(
+            DepthCamera(
+                f"{CAMERA_PREFIX}{i}",
+                cams.width_px,
+                cams.height_px,
+                cams.fovy_deg,
+                cams.min_range_m,
+                cams.max_range_m,
+            )
+            for i in range(len(eyes))
         )
-        for i in range(len(eyes))
-    )
     # Their cloud's crop (round._perception) in the arm's frame.
     info.workspace_min = origin + np.array([0.02, 0.02, sc.table_height_m])
     info.workspace_max = origin + np.array([sc.size_m - 0.02, sc.size_m - 0.02, sc.size_m])
-    env_config = dataclasses.replace(config, perception=clutter.perception, graspability=None)
+    theirs = clutter.arm_sensing == "theirs"
+    perception = clutter.perception if theirs else config.perception
+    env_config = dataclasses.replace(config, perception=perception, graspability=None)
     env = TrialEnv(
         built.model,
         built.data,
@@ -244,7 +251,7 @@ def _arm_attempt(env, planner, kind, config, rngs, execute_grasp, plan_motions) 
     env.panda.open_gripper(env.data)
     mujoco.mj_forward(env.model, env.data)
     try:
-        res = execute_grasp(env, motion, intended, until="lift")
+        res = execute_grasp(env, motion, intended, until=config.clutter.arm_until)
         outcome, target, detail = res.outcome, res.target, res.detail
         sim_time = res.sim_time_s
     except SimUnstable as exc:

@@ -161,10 +161,18 @@ class ClutterConfig:
             :mod:`hsqbench.sim.clutter.arm`).
         arm_cube_xy_m: with ``arm``, where their workspace cube's corner lies in the arm's
             world (x, y; its floor is the table top less ``scene.table_height_m``).
+        arm_sensing: with ``arm``, ``theirs`` (their camera and noise, ``camera`` and
+            ``perception`` here) or ``harness`` (the bridge's second step: the trial config's
+            own depth cameras and perception, their crop kept).
+        arm_until: with ``arm``, the last phase of the harness's execution: ``lift`` (their
+            success test: held after the lift) or ``release`` (the bridge's third step: carried
+            to the bin and released there, the harness's success).
     """
 
     executor: Literal["hand", "arm"] = "hand"
     arm_cube_xy_m: tuple[float, float] = (0.35, -0.15)
+    arm_sensing: Literal["theirs", "harness"] = "theirs"
+    arm_until: Literal["lift", "release"] = "lift"
 
     hand: HandExecutionConfig = field(default_factory=HandExecutionConfig)
     scene: ClutterSceneConfig = field(default_factory=ClutterSceneConfig)
@@ -184,3 +192,7 @@ class ClutterConfig:
     def __post_init__(self) -> None:
         if self.executor not in ("hand", "arm"):
             raise ConfigError(f"clutter.executor must be hand or arm, got {self.executor!r}")
+        if self.arm_sensing not in ("theirs", "harness"):
+            raise ConfigError(f"clutter.arm_sensing: theirs or harness, got {self.arm_sensing!r}")
+        if self.arm_until not in ("lift", "release"):
+            raise ConfigError(f"clutter.arm_until: lift or release, got {self.arm_until!r}")
