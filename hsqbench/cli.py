@@ -13,6 +13,7 @@ import pkgutil
 import sys
 
 from hsqbench import __version__, commands
+from hsqbench.commands._options import show_required
 
 
 class CommandError(RuntimeError):
@@ -57,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
         module = importlib.import_module(f"hsqbench.commands.{info.name}")
         cmd = sub.add_parser(info.name, help=module.HELP, description=module.HELP)
         module.add_arguments(cmd)
+        show_required(cmd)
         cmd.set_defaults(_run=module.run)
     return parser
 

@@ -203,6 +203,18 @@ def require(parser: argparse.ArgumentParser, dest: str, option: str) -> None:
     parser.set_defaults(_required=required, _parser=parser)
 
 
+def show_required(parser: argparse.ArgumentParser) -> None:
+    """Write the options :func:`require` marks without brackets in the usage line (argparse
+    brackets them, not knowing they are required). Call once the parser is complete."""
+    required = parser.get_default("_required")
+    if not required:
+        return
+    usage = parser.format_usage().removeprefix("usage: ").rstrip("\n")
+    for option in required.values():
+        usage = usage.replace(f"[{option}]", option)
+    parser.usage = usage
+
+
 def check_required(args: argparse.Namespace) -> None:
     """argparse's usage error (exit 2) for a required option given in neither spelling."""
     for dest, option in (getattr(args, "_required", None) or {}).items():
