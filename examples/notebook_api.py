@@ -1,6 +1,6 @@
 """hsqbench from Python, as a notebook would drive it: one trial, a benchmark, its tables.
 
-    python examples/notebook_api.py [RUN_DIR]
+    python examples/notebook_api.py [RUN]
 
 Runs the example planner (examples/topdown.py) on the quick protocol's isolated objects (two
 objects, one pose each) with two worker processes, then analyses the run with pandas.
