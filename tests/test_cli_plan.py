@@ -168,3 +168,31 @@ def test_the_example_planner_plans_from_its_file(tmp_path, capsys) -> None:
     assert main(["plan", str(path), "--planner", spec, "--support-plane", "0", "0", "1", "0"]) == 0
     out = capsys.readouterr().out
     assert "1 grasps; best 1:" in out and "time: cleaning" in out
+
+
+@pytest.mark.parametrize(
+    ("factor", "scale", "fix"),
+    [
+        (1000.0, 1.0, "looks like millimetres: pass --scale 0.001"),
+        (1e9, 1.0, "pass the --scale that turns its units into metres"),
+        (1.0, 0.001, "looks like metres: pass --scale 1"),
+    ],
+)
+def test_a_cloud_in_other_units_names_the_scale(tmp_path, capsys, factor, scale, fix) -> None:
+    """A cloud in millimetres (or x1e9) was planned on and called too sparse; now it is refused
+    before planning with the check `assets import` makes of a mesh."""
+    path = write_cloud(tmp_path / "box.npy", box_cloud() * factor)
+    CentroidPlanner.seen.clear()
+    argv = ["plan", str(path), "--planner", "test-centroid", "--scale", str(scale)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and fix in err and f"{path} is " in err
+    assert CentroidPlanner.seen == []  # refused before the planner ran
+
+
+def test_scale_turns_a_cloud_in_millimetres_into_metres(tmp_path, capsys) -> None:
+    points = box_cloud()
+    path = write_cloud(tmp_path / "box_mm.npy", points * 1000.0)
+    CentroidPlanner.seen.clear()
+    assert main(["plan", str(path), "--planner", "test-centroid", "--scale", "0.001"]) == 0
+    np.testing.assert_allclose(CentroidPlanner.seen[-1][0], points, atol=1e-12)

@@ -23,6 +23,7 @@ import tempfile
 from pathlib import Path
 
 from hsqbench.assets.build import UP_AXES, ObjectSpec
+from hsqbench.units import check_metres
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply")
 REGISTRY_DIR = "imported"
@@ -76,28 +77,15 @@ def check_size(path: Path, scale: float) -> None:
     Raises:
         ValueError: one line naming the file, its size and the ``--scale`` to pass.
     """
-    extent = largest_extent(path)
-    size_m = extent * scale
-    if MIN_EXTENT_M <= size_m <= MAX_EXTENT_M:
-        return
-    if size_m > MAX_EXTENT_M:
-        fix = next(
-            (
-                f"looks like {unit}: pass --scale {factor:g}"
-                for unit, factor in (("millimetres", 0.001), ("centimetres", 0.01))
-                if MIN_EXTENT_M <= extent * factor <= MAX_EXTENT_M and factor < scale
-            ),
-            f"pass the --scale that turns its units into metres (size / {MAX_EXTENT_M:g} m)",
-        )
-        bound = f"over the {MAX_EXTENT_M:g} m a graspable object can span"
-    else:
-        fix = (
-            "looks like metres: pass --scale 1"
-            if MIN_EXTENT_M <= extent <= MAX_EXTENT_M and scale != 1.0
-            else "pass the --scale that turns its units into metres"
-        )
-        bound = f"under the {MIN_EXTENT_M * 1000:g} mm the cameras can see"
-    raise ValueError(f"{path.name} is {size_m:.4g} m across at --scale {scale:g}, {bound}: {fix}")
+    check_metres(
+        path.name,
+        largest_extent(path),
+        scale,
+        min_m=MIN_EXTENT_M,
+        max_m=MAX_EXTENT_M,
+        small=f"under the {MIN_EXTENT_M * 1000:g} mm the cameras can see",
+        large=f"over the {MAX_EXTENT_M:g} m a graspable object can span",
+    )
 
 
 def register(

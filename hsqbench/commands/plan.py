@@ -26,8 +26,10 @@ the hidden superquadrics where no camera saw free space (rule 6).
 Grasp frame: P_G is the closing point (between the pads), 'closing' the axis joining the pads,
 'approach' the direction from the palm toward P_G.
 
+A cloud in other units (millimetres) is refused with the --scale that makes it metres.
+
 Exit status: 0 when grasps were found, 1 when none survived (the reason is printed),
-2 on bad input (unreadable, empty or non-finite cloud, bad option) and when the planner
+2 on bad input (unreadable, empty or non-finite cloud, a size no cloud in metres has, bad option) and when the planner
 raised or broke its contract (one line names its file and line).
 """
 
@@ -71,6 +73,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="a camera centre in the cloud's frame, metres (repeat for each camera)",
     )
     add_planner(parser, f"{PLANNER_SPEC_HELP} (default: hsq)", default="hsq")
+    parser.add_argument(
+        "--scale",
+        type=float,
+        default=1.0,
+        metavar="FACTOR",
+        help="multiplies the cloud's coordinates to get metres (0.001 for mm; --camera and "
+        "--support-plane stay in metres)",
+    )
 
 
 def _table(result, top: int) -> str:
@@ -93,6 +103,29 @@ def _table(result, top: int) -> str:
     return "\n".join(rows)
 
 
+#: Largest extent of a cloud in metres: over twice the range of any depth camera near a table
+#: (a Kinect sees 4.5 m), so a larger cloud is in other units (a can in millimetres spans 100).
+MAX_CLOUD_EXTENT_M = 10.0
+
+
+def _check_units(path: Path, points, scale: float) -> None:
+    """The cloud is in metres at ``scale`` (the check ``assets import`` makes of a mesh)."""
+    from hsqbench.assets.importer import MIN_EXTENT_M
+    from hsqbench.units import check_metres
+
+    if not scale > 0:
+        raise ValueError(f"--scale must be > 0 (metres per cloud unit), got {scale:g}")
+    check_metres(
+        str(path),
+        float((points.max(axis=0) - points.min(axis=0)).max()),
+        scale,
+        min_m=MIN_EXTENT_M,
+        max_m=MAX_CLOUD_EXTENT_M,
+        small=f"under the {MIN_EXTENT_M * 1000:g} mm the cameras can see",
+        large=f"over the {MAX_CLOUD_EXTENT_M:g} m a depth camera's cloud spans",
+    )
+
+
 def _vec(v, digits: int) -> str:
     return "(" + ", ".join(f"{x:+.{digits}f}" for x in v) + ")"
 
@@ -107,6 +140,9 @@ def run(args: argparse.Namespace) -> int:
     from hsqbench.settings import code_version
 
     points = read_cloud(args.cloud)
+    _check_units(args.cloud, points, args.scale)
+    if args.scale != 1.0:
+        points = points * args.scale
     planner = get_planner(args.planner, args.planner_config)
     context = PlanningContext(
         support_plane=tuple(args.support_plane) if args.support_plane else None,
@@ -134,6 +170,7 @@ def run(args: argparse.Namespace) -> int:
             "n_points": int(points.shape[0]),
             "config": args.planner_config,
             "seed": args.seed,
+            "scale": args.scale,
             "scene": args.scene,
             "packed": args.scene != "isolated",
             "support_plane": context.support_plane,
