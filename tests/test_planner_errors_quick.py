@@ -61,6 +61,9 @@ def test_a_broken_planner_scores_zero_over_all_its_attempts(quick_run, planner):
     mine = [r for r in rows if r["planner"] == planner]
     assert mine and all(r["status"] == "ok" for r in mine), [r["detail"] for r in mine]
     assert {r["outcome"] for r in mine} == {"planner_error"}
+    # The packed round went on after the first failed attempt and ended at the second (the
+    # stop rule's two consecutive failures), as it does after "no grasp found".
+    assert [r["attempt_index"] for r in mine if r["experiment"] == "packed"] == ["0", "1"]
     for experiment, table in (("isolated", table1(data)), ("packed", table2(data))):
         n = sum(r["experiment"] == experiment for r in mine)
         row = table[table["method"] == planner].iloc[0]

@@ -213,3 +213,15 @@ def test_a_planner_error_is_a_failure_for_the_stop_rule_and_no_grasp_for_vgns():
     assert "no grasp" in vgn.stop_reason(["success", "planner_error"], objects_left=True)
     # VGN's count ends the round before the first attempt without a grasp, as for no_grasp_found.
     assert vgn_round(["success", "planner_error", "success"], [True, False, True]) == (1, 1, True)
+
+
+def test_numpy_timings_are_seconds_too():
+    class Timed:
+        name = "timed"
+
+        def plan(self, points, context):
+            from hsqbench.planner.api import PlanResult
+
+            return PlanResult(grasps=[], timings={"net": np.float32(0.5)}, reason="none")
+
+    assert checked_plan(Timed(), _cloud(), PlanningContext()).timings["net"] == 0.5

@@ -14,6 +14,7 @@ a ``planner_error`` attempt, a failed attempt of that planner in GSR and CR
 from __future__ import annotations
 
 import inspect
+import numbers
 import os
 import sys
 import traceback
@@ -144,7 +145,7 @@ def check_result(planner: Any, result: Any, method: str) -> None:
             raise broke(f"returned grasps[{bad}] as {type(grasps[bad]).__name__}, not a Grasp")
     timings = result.timings
     if not isinstance(timings, Mapping) or not all(
-        isinstance(v, int | float) and not isinstance(v, bool) for v in timings.values()
+        isinstance(v, numbers.Real) and not isinstance(v, bool) for v in timings.values()
     ):
         raise broke("returned timings that are not a mapping of stage names to seconds")
     if not isinstance(result.reason, str):
