@@ -27,6 +27,7 @@ import pandas as pd
 
 from hsqbench.experiment.graspable import method_label
 from hsqbench.experiment.markdown import md_table, p_text, signed_pp
+from hsqbench.experiment.object_table import OBJECTS_CSV
 from hsqbench.experiment.paired_table import DEFAULT_REFERENCE, PAIRED_CSV
 from hsqbench.experiment.pile_table import TABLE4_CSV
 from hsqbench.experiment.report import TABLE1_CSV, TABLE2_CSV
@@ -71,15 +72,50 @@ class Run:
         return pd.read_csv(path)
 
     def vs_reference(self, comparison: str, label: str) -> str:
-        """The paired difference of planner ``label`` to the reference, as a cell."""
+        """The paired difference of planner ``label`` to the reference over objects or rounds,
+        its interval and Holm-adjusted p, as a cell."""
         if label == method_label(DEFAULT_REFERENCE):
             return "reference"
+        r = self._paired_row(comparison, label)
+        if r is None:
+            return ""
+        ci = (
+            f" [{signed_pp(r.ci_low_pp)}, {signed_pp(r.ci_high_pp)}]"
+            if np.isfinite(r.ci_low_pp)
+            else ""
+        )
+        return f"{signed_pp(r.difference_pp)}{ci}, p {p_text(r.p_holm)}"
+
+    def _paired_row(self, comparison: str, label: str) -> Any:
         p = self.paired
         rows = p[(p["comparison"] == comparison) & (p["planner"].map(method_label) == label)]
+        return None if rows.empty else next(rows.itertuples())
+
+    def paired_note(self, comparison: str) -> str:
+        """The line under a table: what its paired column tests, and the Holm family."""
+        p = self.paired
+        family = p[p["comparison"] == comparison]
+        if family.empty:
+            return ""
+        unit = str(family["unit"].iloc[0])
+        judged = family[family["verdict"] != "not distinguishable"]
+        words = ", ".join(f"{r.planner} {r.verdict}" for r in judged.itertuples()) or "none"
+        return (
+            f"Paired column: difference to {DEFAULT_REFERENCE} over {unit} (cluster-bootstrap "
+            f"interval; exact sign-flip p over {unit}), p Holm-adjusted over the {len(family)} "
+            f"planners of this table; at p < 0.05 after adjustment: {words}. Others: not "
+            "distinguishable."
+            + (" GSR and CR intervals: cluster bootstrap over rounds." if unit == "rounds" else "")
+        )
+
+    def objects_interval(self, label: str) -> str:
+        """Planner ``label``'s isolated GSR interval over objects (``object_level.csv``)."""
+        table = self.table(OBJECTS_CSV)
+        rows = table[table["planner"].map(method_label) == label]
         if rows.empty:
             return ""
         r = rows.iloc[0]
-        return f"{signed_pp(r.difference_pp)} [{signed_pp(r.ci_low_pp)}, {signed_pp(r.ci_high_pp)}], p {p_text(r.p_value)}"
+        return _ci(r.objects_low_percent, r.objects_high_percent)
 
     def measured_line(self) -> str:
         m = self.meta
@@ -124,6 +160,15 @@ ISOLATED: Columns = (
     ("graspable", lambda r: _pct(r.graspable_gsr_percent)),
     ("95 % CI", lambda r: _ci(r.graspable_ci_low_percent, r.graspable_ci_high_percent)),
 )
+#: Unseen objects: the interval over objects first (the claim is about the next object).
+ISOLATED_UNSEEN: Columns = (
+    ("GSR", lambda r: _pct(r.gsr_percent)),
+    ("95 % CI over objects", lambda r: r.objects_ci),
+    ("95 % CI, Wilson", lambda r: _ci(r.ci_low_percent, r.ci_high_percent)),
+    *KN_CELL,
+    ("graspable", lambda r: _pct(r.graspable_gsr_percent)),
+    ("95 % CI", lambda r: _ci(r.graspable_ci_low_percent, r.graspable_ci_high_percent)),
+)
 PACKED: Columns = (
     *GSR_CELLS,
     *CR_CELLS,
@@ -142,6 +187,8 @@ def _render(run: Run, csv: str, columns: Columns, comparison: str, reported: boo
     table = run.table(csv)
     if not reported:
         table = table[table["source"].str.startswith("measured")]
+    if columns is ISOLATED_UNSEEN:
+        table = table.assign(objects_ci=[run.objects_interval(m) for m in table["method"]])
     rows = []
     for r in table.itertuples():
         measured = str(r.source).startswith("measured")
@@ -154,13 +201,22 @@ def _render(run: Run, csv: str, columns: Columns, comparison: str, reported: boo
             ]
         )
     what = comparison.split()[-1]
-    paired = "vs hsq, paired (pp)" if what == "GSR" else f"{what} vs hsq, paired (pp)"
-    return md_table(["planner", *(h for h, _ in columns), "source", paired], rows)
+    over = "objects" if comparison == "isolated GSR" else "rounds"
+    paired = f"vs hsq over {over}, paired (pp)"
+    paired = paired if what == "GSR" else f"{what} {paired}"
+    table_md = md_table(["planner", *(h for h, _ in columns), "source", paired], rows)
+    note = run.paired_note(comparison)
+    return f"{table_md}\n\n{note}" if note else table_md
 
 
 def isolated_table(run: Run, reported: bool = True) -> str:
     """Table I: isolated GSR over all and over graspable presentations, paired to hsq."""
     return _render(run, TABLE1_CSV, ISOLATED, "isolated GSR", reported)
+
+
+def unseen_isolated_table(run: Run) -> str:
+    """Table III: as Table I with the interval over objects first, and no reported rows."""
+    return _render(run, TABLE1_CSV, ISOLATED_UNSEEN, "isolated GSR", reported=False)
 
 
 def packed_table(run: Run, reported: bool = True) -> str:
@@ -182,7 +238,7 @@ TABLES: dict[str, tuple[str, Callable[[Run], str]]] = {
     "paper-isolated": ("paper3", isolated_table),
     "paper-packed": ("paper3", packed_table),
     # The papers report nothing on these objects: their rows would mislead here.
-    "unseen-isolated": ("ycb3", lambda run: isolated_table(run, reported=False)),
+    "unseen-isolated": ("ycb3", unseen_isolated_table),
     "unseen-packed": ("ycb3", lambda run: packed_table(run, reported=False)),
     "paper-pile": ("paper3-pile", pile_table),
 }
