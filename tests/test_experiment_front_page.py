@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import shutil
 
 import pandas as pd
 import pytest
 
 from hsqbench.experiment.canonical import load_canonical, make_results
 from hsqbench.experiment.front_page import TABLES, FrontPageError, main, update
+from hsqbench.experiment.markdown import p_text
 from hsqbench.settings import REPO_ROOT
 from tests.fake_backend import FakeBackend
 
@@ -61,10 +63,37 @@ def test_blocks_are_rewritten_from_the_runs_with_their_code_version(quick_result
         assert ("reference" in line) == (row.method == "hsq") and (", p " in line) != (
             row.method == "hsq"
         )
+    # the paired cell carries the Holm-adjusted p of the test over objects, and a line says so
+    paired = pd.read_csv(quick_results / "paper3" / "paired.csv").set_index("comparison")
+    row = paired.loc["isolated GSR"]
+    line = next(ln for ln in text.splitlines() if ln.startswith("| antipodal |"))
+    assert line.rstrip(" |").endswith(f"p {p_text(row['p_holm'])}")
+    assert "vs hsq over objects, paired" in text
+    assert "p Holm-adjusted over the 1 planners of this table" in text
     # the paper's reported rows beside its own objects, never beside the unseen ones
     head, unseen = text.split("<!-- table: unseen-packed -->")
     assert "reported, real robot" in head and "reported" not in unseen
     assert update(text, quick_results) == text  # idempotent: --check passes after a write
+
+
+def test_unseen_objects_show_the_interval_over_objects_first(quick_results, tmp_path):
+    results = tmp_path / "results"
+    shutil.copytree(quick_results, results)
+    text = update(_readme("unseen-isolated"), results)  # two objects: no interval over them
+    line = next(ln for ln in text.splitlines() if ln.startswith("| hsq |"))
+    assert line.split(" | ")[2] == ""
+    pd.DataFrame(
+        {
+            "planner": ["hsq", "antipodal"],
+            "objects_low_percent": [61.04, 40.0],
+            "objects_high_percent": [88.96, 70.0],
+        }
+    ).to_csv(results / "ycb3" / "object_level.csv", index=False)
+    text = update(_readme("unseen-isolated"), results)
+    head = next(ln for ln in text.splitlines() if ln.startswith("| planner |"))
+    assert head.startswith("| planner | GSR | 95 % CI over objects | 95 % CI, Wilson |")
+    line = next(ln for ln in text.splitlines() if ln.startswith("| hsq |"))
+    assert line.split(" | ")[2] == "[61.0, 89.0]"
 
 
 def test_a_missing_run_or_block_says_what_to_do(quick_results, tmp_path):
@@ -83,4 +112,4 @@ def test_check_fails_on_a_stale_readme_and_write_fixes_it(quick_results, tmp_pat
     assert main([*args, "--check"]) == 1
     assert "differ" in capsys.readouterr().err
     assert main(args) == 0 and main([*args, "--check"]) == 0
-    assert "CR vs hsq, paired" in readme.read_text()
+    assert "CR vs hsq over rounds, paired" in readme.read_text()

@@ -109,7 +109,10 @@ class Run:
         )
 
     def objects_interval(self, label: str) -> str:
-        """Planner ``label``'s isolated GSR interval over objects (``object_level.csv``)."""
+        """Planner ``label``'s isolated GSR interval over objects (``object_level.csv``; a run
+        with too few objects has none: an empty cell)."""
+        if not (self.folder / OBJECTS_CSV).is_file():
+            return ""
         table = self.table(OBJECTS_CSV)
         rows = table[table["planner"].map(method_label) == label]
         if rows.empty:
