@@ -464,12 +464,12 @@ def test_going_home_backs_out_of_an_object_still_touching_a_finger(config, monke
     withdrawn = []
     monkeypatch.setattr(protocols, "withdraw", lambda env: withdrawn.append(1) or "")
     with TrialEnv.build("packed", ["proc_box"], 5, config) as env:
-        protocols._return_home(env)
+        protocols.return_home(env)
         assert withdrawn == []
         n = len(env.probe.names)
         monkeypatch.setattr(
             SceneProbe, "finger_contacts", lambda self, data: np.ones((n, 2), dtype=bool)
         )
-        protocols._return_home(env)
+        protocols.return_home(env)
         assert withdrawn == [1]
         assert np.abs(env.panda.arm_q(env.data) - env.panda.home_arm_q).max() < 0.01

@@ -26,7 +26,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from hsqbench.sim.clutter.round import STREAMS
+from hsqbench.sim.clutter.round import STREAMS, plan_step
 from hsqbench.sim.clutter.world import ClutterWorld, camera_eyes, look_at_quat
 from hsqbench.sim.motion import SimUnstable
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
@@ -60,8 +60,7 @@ def arm_env(world: ClutterWorld, kind: str, seed: int, config: Any) -> tuple[Any
     origin = cube_origin(world, table_top)
     poses = []
     for n in names:
-        a = world._qadr(n)
-        pose = world.data.qpos[a : a + 7].copy()
+        pose = world.pose(n)
         pose[:3] += origin
         poses.append(pose)
     scales = [world.scales[n] for n in names]
@@ -143,9 +142,8 @@ def _remove_and_wait(env: Any, origin: np.ndarray, world: ClutterWorld) -> list[
 def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, config: Any) -> Any:
     """The round of :func:`hsqbench.sim.clutter.round.run_clutter_round` with the arm (module
     notes); ``world`` is the generated scene of their world."""
-    from hsqbench.sim.trial.attempt import plan_motions, resolve_planner
-    from hsqbench.sim.trial.execution import execute_grasp
-    from hsqbench.sim.trial.protocols import _return_home
+    from hsqbench.sim.trial.attempt import resolve_planner
+    from hsqbench.sim.trial.protocols import return_home
 
     plan_with = resolve_planner(planner, config)
     name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
@@ -161,7 +159,7 @@ def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, confi
     rule = world.config.rule
     with env:
         while rule.stop_reason(outcomes, bool(env.objects_on_table())) is None:
-            attempt = _arm_attempt(env, plan_with, kind, config, rngs, execute_grasp, plan_motions)
+            attempt = _arm_attempt(env, plan_with, kind, config, rngs)
             attempts.append(attempt)
             outcomes.append(attempt.outcome.value)
             if attempt.outcome in (Outcome.NO_GRASP_FOUND, Outcome.SIM_UNSTABLE):
@@ -170,7 +168,7 @@ def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, confi
                 env.remove(attempt.target)  # taken out of the hand before it opens
                 cleared.append(attempt.target)
             try:
-                _return_home(env)
+                return_home(env)
                 gone = _remove_and_wait(env, origin, world)
             except SimUnstable as exc:
                 attempt.detail += f"; then the simulation became unstable: {exc}"
@@ -190,46 +188,30 @@ def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, confi
     )
 
 
-def _arm_attempt(env, planner, kind, config, rngs, execute_grasp, plan_motions) -> Attempt:
-    from hsqbench.planner.api import PlanningContext
-    from hsqbench.sim.trial.attempt import AttemptTrace
+def _arm_attempt(env: Any, planner: Any, kind: str, config: Any, rngs: dict) -> Attempt:
+    """Look, plan (:func:`~hsqbench.sim.clutter.round.plan_step`), motion-plan and execute one
+    grasp with the arm."""
+    from hsqbench.sim.trial.attempt import AttemptTrace, plan_motions
+    from hsqbench.sim.trial.execution import execute_grasp
 
     t0 = time.perf_counter()
     try:
         look = env.look()
     except SimUnstable as exc:
         return Attempt(Outcome.SIM_UNSTABLE, detail=str(exc))
-    obs = look.obs
-    perception_s = time.perf_counter() - t0
-    points = np.asarray(obs.points)
-    privileged = getattr(planner, "privileged", False)
-    if len(points) < config.min_cloud_points and not privileged:
-        detail = f"the cloud has {len(points)} points (fewer than {config.min_cloud_points})"
-        return Attempt(Outcome.NO_GRASP_FOUND, perception_s=perception_s, detail=detail)
-    context = PlanningContext(
-        support_plane=tuple(float(x) for x in env.info.support_plane),
-        packed=True,
-        seed=int(rngs["planner"].integers(2**31)),
-        camera_positions=np.asarray(obs.camera_positions),
-        workspace_bounds=(obs.workspace_min, obs.workspace_max),
-        truth=look.truth if privileged else None,
-        scene=kind,
-        depth_views=getattr(obs, "cameras", None),
+    planned = plan_step(
+        look.obs,
+        time.perf_counter() - t0,
+        planner,
+        kind,
+        config,
+        int(rngs["planner"].integers(2**31)),
+        env.info.support_plane,
+        lambda: look.truth,
     )
-    t1 = time.perf_counter()
-    plan = planner.plan(points, context)
-    planning_s = time.perf_counter() - t1
-    grasps = plan.grasps
-    n_top = min(len(grasps), config.recorded_scores)
-    common = {
-        "n_grasps": len(grasps),
-        "perception_s": perception_s,
-        "planning_s": planning_s,
-        "top_scores": tuple(float(grasps[i].score) for i in range(n_top)),
-        "planner_stages_s": {k: float(v) for k, v in plan.timings.items()},
-    }
-    if not len(grasps):
-        return Attempt(Outcome.NO_GRASP_FOUND, detail=plan.reason or "no grasp", **common)
+    if planned.ended is not None:
+        return planned.ended
+    grasps, points, common = planned.grasps, planned.points, planned.common
     trace = AttemptTrace()
     t2 = time.perf_counter()
     chosen = plan_motions(env, grasps, points, trace)

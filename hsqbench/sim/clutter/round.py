@@ -15,7 +15,8 @@ raises or breaks its contract is a ``planner_error`` attempt, which ends the rou
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -70,7 +71,6 @@ def run_clutter_round(
     """A round of VGN/GIGA's clutter removal with ``planner`` (a name or a planner) under the
     trial config ``config`` whose ``clutter`` is set (its robot hand, physics, planners,
     ``min_cloud_points`` and ``recorded_scores`` apply)."""
-    from hsqbench.planner.api import PlanningContext
     from hsqbench.sim.trial.attempt import resolve_planner
 
     clutter = config.clutter
@@ -93,7 +93,7 @@ def run_clutter_round(
     outcomes: list[str] = []
     try:
         while clutter.rule.stop_reason(outcomes, bool(world.in_play)) is None:
-            attempt = _attempt(world, perception, plan_with, rngs, kind, config, PlanningContext)
+            attempt = _attempt(world, perception, plan_with, rngs, kind, config)
             attempts.append(attempt)
             outcomes.append(attempt.outcome.value)
             if attempt.outcome == Outcome.SUCCESS:
@@ -119,30 +119,44 @@ def run_clutter_round(
     )
 
 
-def _attempt(
-    world: ClutterWorld,
-    perception: Any,
+@dataclass
+class Planned:
+    """A look and a plan: ``ended`` when the step ends without a grasp (too few points, no
+    grasp, the planner's own error), else the planner's ``grasps`` and what every attempt
+    records (``common``)."""
+
+    ended: Attempt | None
+    grasps: Sequence[Any] = ()
+    points: Any = None
+    common: dict[str, Any] = field(default_factory=dict)
+
+
+def plan_step(
+    obs: Any,
+    perception_s: float,
     planner: Any,
-    rngs: dict[str, np.random.Generator],
     kind: str,
     config: Any,
-    context_type: Any,
-) -> Attempt:
-    t0 = time.perf_counter()
-    obs = perception.observe(world.data, rngs["perception_noise"])
-    perception_s = time.perf_counter() - t0
+    seed: int,
+    support_plane: Any,
+    truth: Callable[[], Any],
+) -> Planned:
+    """Plan on one observation as their loop does (the cloud, the depth images, the table plane
+    and the workspace; ``truth`` is called for a privileged planner only)."""
+    from hsqbench.planner.api import PlanningContext
+
     points = np.asarray(obs.points)
     privileged = getattr(planner, "privileged", False)
     if len(points) < config.min_cloud_points and not privileged:
         detail = f"the cloud has {len(points)} points (fewer than {config.min_cloud_points})"
-        return Attempt(Outcome.NO_GRASP_FOUND, perception_s=perception_s, detail=detail)
-    context = context_type(
-        support_plane=tuple(float(x) for x in world.support_plane),
+        return Planned(Attempt(Outcome.NO_GRASP_FOUND, perception_s=perception_s, detail=detail))
+    context = PlanningContext(
+        support_plane=tuple(float(x) for x in support_plane),
         packed=True,
-        seed=int(rngs["planner"].integers(2**31)),
+        seed=seed,
         camera_positions=np.asarray(obs.camera_positions),
         workspace_bounds=(obs.workspace_min, obs.workspace_max),
-        truth=_truth(world, rngs["oracle"]) if privileged else None,
+        truth=truth() if privileged else None,
         scene=kind,
         depth_views=getattr(obs, "cameras", None),
     )
@@ -151,8 +165,13 @@ def _attempt(
         plan = checked_plan(planner, points, context)
     except PlannerError as exc:  # the planner's own failure: a failed attempt without a grasp
         planning_s = time.perf_counter() - t1
-        return Attempt(
-            Outcome.PLANNER_ERROR, perception_s=perception_s, planning_s=planning_s, detail=str(exc)
+        return Planned(
+            Attempt(
+                Outcome.PLANNER_ERROR,
+                perception_s=perception_s,
+                planning_s=planning_s,
+                detail=str(exc),
+            )
         )
     planning_s = time.perf_counter() - t1
     grasps = plan.grasps
@@ -166,7 +185,33 @@ def _attempt(
     }
     if not len(grasps):
         detail = plan.reason or "the planner returned no grasp"
-        return Attempt(Outcome.NO_GRASP_FOUND, detail=detail, **common)
+        return Planned(Attempt(Outcome.NO_GRASP_FOUND, detail=detail, **common))
+    return Planned(None, grasps, points, common)
+
+
+def _attempt(
+    world: ClutterWorld,
+    perception: Any,
+    planner: Any,
+    rngs: dict[str, np.random.Generator],
+    kind: str,
+    config: Any,
+) -> Attempt:
+    t0 = time.perf_counter()
+    obs = perception.observe(world.data, rngs["perception_noise"])
+    planned = plan_step(
+        obs,
+        time.perf_counter() - t0,
+        planner,
+        kind,
+        config,
+        int(rngs["planner"].integers(2**31)),
+        world.support_plane,
+        lambda: _truth(world, rngs["oracle"]),
+    )
+    if planned.ended is not None:
+        return planned.ended
+    grasps, common = planned.grasps, planned.common
     grasp = grasps[0]
     position, rotation = np.asarray(grasp.position, float), np.asarray(grasp.rotation, float)
     t2 = time.perf_counter()

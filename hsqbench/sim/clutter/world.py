@@ -111,6 +111,11 @@ class ClutterWorld:
         self.data.qpos[a + 3 : a + 7] = quat
         self.data.qvel[d : d + 6] = 0.0
 
+    def pose(self, name: str) -> Array:
+        """(x, y, z, qw, qx, qy, qz) of an object's frame now."""
+        a = self._qadr(name)
+        return self.data.qpos[a : a + 7].copy()
+
     def com(self, name: str) -> Array:
         """Centre of mass of an object now (their body position)."""
         return self.data.xipos[self.body_ids[name]].copy()

@@ -17,7 +17,7 @@ from hsqbench.sim.trial.env import TrialEnv
 from hsqbench.sim.trial.release import open_hand_contacts, withdraw
 
 
-def _return_home(env: TrialEnv) -> None:
+def return_home(env: TrialEnv) -> None:
     """Open the hand, back out along the approach while an object still touches a finger (a
     cup or bag in the bin hooked on one would otherwise be lifted out with the hand), rise, and
     go home (between the attempts of a packed round), with :func:`open_hand_contacts`."""
@@ -159,7 +159,7 @@ def run_packed_round(
             if attempt.outcome == Outcome.SIM_UNSTABLE:
                 break
             try:
-                _return_home(env)
+                return_home(env)
             except SimUnstable as exc:
                 attempt.detail += f"; then the simulation became unstable going home: {exc}"
                 break
