@@ -197,3 +197,21 @@ def test_trial_set_changes_one_value_of_the_trial_config(monkeypatch, capsys):
     assert main(["trial", "--object", "mug", "--set", "execution.lift_heigth_m=1"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "lift_heigth_m" in err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["trial", "--object", "mug", "--seed", "-1"],
+        ["scene", "--seed", "-3"],
+        ["plan", "cloud.npy", "--seed", "-2"],
+        ["benchmark", "--seeds", "0", "-1"],
+    ],
+)
+def test_a_negative_seed_is_a_usage_error_naming_the_option(argv, capsys):
+    """It reached NumPy's generator and came back as 'expected non-negative integer'."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    option = "--seeds" if "--seeds" in argv else "--seed"
+    assert f"argument {option}: must be >= 0, got -" in capsys.readouterr().err

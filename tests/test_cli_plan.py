@@ -196,3 +196,9 @@ def test_scale_turns_a_cloud_in_millimetres_into_metres(tmp_path, capsys) -> Non
     CentroidPlanner.seen.clear()
     assert main(["plan", str(path), "--planner", "test-centroid", "--scale", "0.001"]) == 0
     np.testing.assert_allclose(CentroidPlanner.seen[-1][0], points, atol=1e-12)
+
+
+def test_a_cloud_at_one_place_is_named_so(tmp_path, capsys) -> None:
+    path = write_cloud(tmp_path / "one.xyz", np.array([[0.1, 0.2, 0.3]] * 4), binary=False)
+    assert main(["plan", str(path)]) == 2
+    assert capsys.readouterr().err.strip().endswith("all its 4 point(s) are at one place")

@@ -105,6 +105,18 @@ def deprecated_aliases(parser: argparse.ArgumentParser) -> dict[str, str]:
     }
 
 
+def non_negative_int(text: str) -> int:
+    """An integer >= 0 (for seeds: NumPy's generators take no negative one), or argparse's
+    usage error naming the option."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+    return value
+
+
 def positive_int(text: str) -> int:
     """An integer >= 1 (for ``--jobs`` and counts), or argparse's usage error."""
     try:
@@ -273,11 +285,15 @@ def protocol_of(args: argparse.Namespace) -> str:
 
 
 def add_seed(parser: argparse.ArgumentParser, help_text: str, default: int | None = 0) -> None:
-    parser.add_argument("--seed", type=int, default=default, metavar="N", help=help_text)
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=default, metavar="N", help=help_text
+    )
 
 
 def add_seeds(parser: argparse.ArgumentParser, help_text: str) -> None:
-    parser.add_argument("--seeds", nargs="+", type=int, default=None, metavar="N", help=help_text)
+    parser.add_argument(
+        "--seeds", nargs="+", type=non_negative_int, default=None, metavar="N", help=help_text
+    )
 
 
 # --- scenes -----------------------------------------------------------------------------------

@@ -115,9 +115,12 @@ def _check_units(path: Path, points, scale: float) -> None:
 
     if not scale > 0:
         raise ValueError(f"--scale must be > 0 (metres per cloud unit), got {scale:g}")
+    extent = float((points.max(axis=0) - points.min(axis=0)).max())
+    if extent == 0.0:  # no scale makes one place an object
+        raise ValueError(f"{path}: all its {len(points)} point(s) are at one place")
     check_metres(
         str(path),
-        float((points.max(axis=0) - points.min(axis=0)).max()),
+        extent,
         scale,
         min_m=MIN_EXTENT_M,
         max_m=MAX_CLOUD_EXTENT_M,
