@@ -100,6 +100,17 @@ def test_the_report_counts_planner_errors_apart_from_infrastructure_errors(quick
     assert line.endswith("| 0/2 | 2 | 0 | measured, simulation (this run) |"), line
 
 
+def test_a_sweep_point_counts_planner_errors_as_failures(quick_run):
+    from hsqbench.experiment.sweep_table import run_rows
+
+    data, rows, _ = quick_run
+    for row in run_rows(data, ["isolated", "packed"]):
+        n = sum(
+            r["planner"] == row["planner"] and r["experiment"] == row["experiment"] for r in rows
+        )
+        assert (row["n"], row["successes"], row["planner_errors"], row["errors"]) == (n, 0, n, 0)
+
+
 def test_the_runs_summary_counts_planner_errors_apart_from_infrastructure_errors(quick_run, plugin):
     _, rows, summary = quick_run
     assert summary.errors == 0 and summary.planner_errors == len(rows) > 0

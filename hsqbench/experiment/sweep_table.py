@@ -3,8 +3,9 @@ experiment, parameter, point and planner, read from the points' run folders. ``v
 point's label, ``x`` its position on the plot (empty for categories such as the cameras).
 
 Isolated: GSR (successful attempts / attempts). Packed: GSR over all attempts of the rounds, and
-CR (objects cleared / objects presented). Error rows (infrastructure failures) are counted in
-``errors`` and left out of the rates, as in the report's tables.
+CR (objects cleared / objects presented). Attempts that ended in the planner's own error are
+failed attempts, in the rates and counted in ``planner_errors``; error rows (infrastructure
+failures) are counted in ``errors`` and left out of the rates, as in the report's tables.
 
 Every point runs the same presentations, so each point is also compared with its parameter's
 default point (the one without overrides) as ``hsqbench compare`` compares two runs
@@ -28,6 +29,7 @@ from hsqbench.experiment.rows import has_attempts
 from hsqbench.experiment.run_compare import matched_attempts, run_differences
 from hsqbench.experiment.run_data import RunData, load_run
 from hsqbench.experiment.stats import Rate
+from hsqbench.sim.outcome import Outcome
 
 COLUMNS = (
     "protocol",
@@ -54,6 +56,7 @@ COLUMNS = (
     "vs_default_ci_high_pp",
     "vs_default_p_value",
     "vs_default_verdict",
+    "planner_errors",
     "errors",
     "confidence",
     "run",
@@ -90,6 +93,7 @@ def run_rows(data: RunData, experiments: list[str]) -> list[dict[str, Any]]:
                 "n": n,
                 "successes": k,
                 **_rate(k, n, data.confidence, "gsr"),
+                "planner_errors": int((ok["outcome"] == str(Outcome.PLANNER_ERROR)).sum()),
                 "errors": errors,
                 "confidence": data.confidence,
             }
