@@ -49,6 +49,14 @@ def vgn_round(outcomes: list[str], successes: list[bool]) -> tuple[int, int, boo
     return int(sum(successes[:cut])), cut, cut < len(outcomes)
 
 
+def round_counts(data: RunData, kind: str, planner: str) -> pd.DataFrame:
+    """:func:`_rounds` of one planner, from the run's finished attempts (for other modules:
+    :mod:`hsqbench.experiment.bridge`)."""
+    ok = data.attempts[data.attempts["status"] == STATUS_OK]
+    by_key = {k: g.sort_values("attempt_index") for k, g in ok.groupby("trial_key")}
+    return _rounds(data, kind, planner, by_key)
+
+
 def _rounds(data: RunData, kind: str, planner: str, by_key: dict) -> pd.DataFrame:
     """Per finished ``kind`` round of ``planner``: VGN-rule successes and attempts, whether it
     was cut, our successes and attempts, objects presented and removed (indexed by draw)."""
