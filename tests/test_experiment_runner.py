@@ -152,6 +152,21 @@ def test_resume_refuses_another_config_and_force_moves_it_aside(tmp_path) -> Non
     assert len(moved) == 1 and len(load_results(moved[0]).complete_keys) == N_SMALL
 
 
+def test_a_refused_resume_names_what_differs(tmp_path) -> None:
+    """Not only two hashes: the settings that differ, with their old and new values."""
+    run_dir = tmp_path / "r"
+    run_benchmark(SMALL, run_dir, backend=FakeBackend(), progress=False)
+    more = ExperimentConfig(
+        planners=(*SMALL.planners, "c"), isolated=SMALL.isolated, packed=SMALL.packed
+    )
+    with pytest.raises(ResultsError) as refused:
+        run_benchmark(more, run_dir, backend=FakeBackend(default_success=0.3), resume=True)
+    message = str(refused.value)
+    planners = ", ".join(f'"{p}"' for p in SMALL.planners)
+    assert f'config.planners: [{planners}] -> [{planners}, "c"]' in message
+    assert "backend.default_success: 0.8 -> 0.3" in message
+
+
 def test_selection_then_resume_completes_the_same_run(tmp_path) -> None:
     run_dir = tmp_path / "r"
     s1 = run_benchmark(

@@ -9,6 +9,7 @@ terminal, periodic plain lines in a log: :mod:`hsqbench.experiment.progress`).
 from __future__ import annotations
 
 import itertools
+import json
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
@@ -165,7 +166,9 @@ def run_benchmark(
     chash = config_hash(RunIdentity(config, fingerprint))
     specs = list(specs)
     draws = {key: packed_draws(specs, kind) for kind, key in DRAW_KEYS.items()}
-    _check_resumable(run_dir, meta, draws, chash)
+    _check_resumable(
+        run_dir, meta, draws, chash, {"config": to_dict(config), "backend": fingerprint}
+    )
 
     with store.locked():
         version = code_version()
@@ -334,10 +337,16 @@ def _existing_run(
 
 
 def _check_resumable(
-    run_dir: Path, meta: dict[str, Any] | None, draws: dict[str, dict[str, dict]], chash: str
+    run_dir: Path,
+    meta: dict[str, Any] | None,
+    draws: dict[str, dict[str, dict]],
+    chash: str,
+    identity: dict[str, Any],
 ) -> None:
     """A resumed run must draw the same packed and pile rounds and have the same config
-    hash. ``draws``: ``run.json`` key (``packed_draws``, ``pile_draws``) -> the rounds' draws."""
+    hash. ``draws``: ``run.json`` key (``packed_draws``, ``pile_draws``) -> the rounds' draws;
+    ``identity``: this config and backend settings, as ``run.json`` records them, to name what
+    differs."""
     if meta is None:
         return
     changed = []
@@ -352,11 +361,34 @@ def _check_resumable(
             "placement changed. Choose a new --run name, or --force to move the old run aside"
         )
     if meta.get("config_hash") != chash:
+        recorded = {"config": meta.get("config"), "backend": meta.get("backend")}
+        found = differences(recorded, json.loads(json.dumps(identity)))
+        shown = "; ".join(found[:4]) + (f"; and {len(found) - 4} more" if len(found) > 4 else "")
         raise ResultsError(
             f"{run_dir} was run with config hash {meta.get('config_hash')}, but this config "
-            f"(with its trial settings) hashes to {chash}: results of two configs must not mix. "
-            "Choose a new --run name, or --force to move the old run aside"
+            f"(with its trial settings) hashes to {chash}"
+            + (f" ({shown})" if shown else "")
+            + ": results of two configs must not mix. Choose a new --run name, or --force to "
+            "move the old run aside"
         )
+
+
+def differences(old: Any, new: Any, path: str = "") -> list[str]:
+    """``path: old -> new`` for every leaf where two JSON trees (``run.json``'s config and
+    backend settings) differ, in key order."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        out = []
+        for key in sorted(set(old) | set(new), key=str):
+            out += differences(old.get(key), new.get(key), f"{path}.{key}" if path else str(key))
+        return out
+    if old == new:
+        return []
+
+    def short(value: Any) -> str:
+        text = json.dumps(value)
+        return text if len(text) <= 60 else text[:57] + "..."
+
+    return [f"{path}: {short(old)} -> {short(new)}"]
 
 
 def _run_pending(
