@@ -60,7 +60,7 @@ def test_the_command_runs_the_benchmark_with_that_list(monkeypatch, tmp_path) ->
     seen = {}
 
     class Summary:
-        selected = skipped = ran = errors = 0
+        selected = skipped = ran = errors = planner_errors = 0
         config_hash = "x"
 
     def fake_run(config, run_dir, **kwargs):
