@@ -226,3 +226,20 @@ def test_fail_if_worse_judges_by_holm_adjusted_p(hsq_run, tmp_path, capsys) -> N
 def test_the_canonical_paper3_and_ycb3_are_not_compared(capsys) -> None:
     assert main(["compare", str(CANON.parent / "paper3"), str(CANON), "--fail-if-worse"]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_a_single_round_prints_no_nan_interval(tmp_path, capsys) -> None:
+    """A quick run has one packed round: its CR difference has no interval, shown as a dash."""
+    from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
+    from hsqbench.experiment.runner import run_benchmark
+
+    config = ExperimentConfig(
+        planners=("a",),
+        isolated=IsolatedConfig(objects=("mug", "bowl")),
+        packed=PackedConfig(objects=("mug", "bowl"), rounds=1, objects_per_round=2),
+    )
+    for name in ("a", "b"):
+        run_benchmark(config, tmp_path / name, backend=FakeBackend(), progress=False)
+    assert main(["compare", str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    out = capsys.readouterr().out
+    assert "packed CR" in out and "nan" not in out and "[—]" in out

@@ -82,7 +82,10 @@ def _print_differences(differences: Any, confidence: float) -> None:
         f"{'s->f':>5} {'f->s':>5} {'pairs':>6} {'over':>14} {'p':>8} {'p Holm':>8}  B against A"
     )
     for _, r in differences.iterrows():
-        diff = f"{r['difference_pp']:+.1f} [{r['ci_low_pp']:+.1f}, {r['ci_high_pp']:+.1f}]"
+        low, high = r["ci_low_pp"], r["ci_high_pp"]
+        # No interval over a single round (or pair): a dash, as the report's tables print it.
+        ci = "[—]" if low != low or high != high else f"[{low:+.1f}, {high:+.1f}]"
+        diff = f"{r['difference_pp']:+.1f} {ci}"
         print(
             f"  {r['comparison']:<13} {r['planner']:<22} {r['a_percent']:6.1f} "
             f"{r['b_percent']:6.1f} {diff:>24} {int(r['success_to_failure']):5d} "
