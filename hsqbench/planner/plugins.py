@@ -141,11 +141,7 @@ def load_spec(spec: str) -> tuple[Any, PlannerSource]:
             f"planner spec {spec!r}: importing {target} failed: {type(exc).__name__}: {exc}"
         ) from exc
     if not hasattr(module, attr):
-        names = [
-            n
-            for n, v in vars(module).items()
-            if inspect.isclass(v) and hasattr(v, "plan") and v.__module__ == module.__name__
-        ]
+        names = _planner_classes(module)
         raise PluginError(
             f"planner spec {spec!r}: {target} has no {attr!r}{near(attr, names)}; its planner "
             f"classes: {', '.join(names) or 'none'}"
@@ -154,6 +150,44 @@ def load_spec(spec: str) -> tuple[Any, PlannerSource]:
     dist, version = _distribution(module.__name__) if kind == "module" else (None, None)
     source = PlannerSource(kind, full, module.__name__, dist, version, file, _file_hash(file))
     return getattr(module, attr), source
+
+
+def _planner_classes(module: Any) -> list[str]:
+    """The names of the planner-like classes (with a ``plan``) a module defines."""
+    return [
+        n
+        for n, v in vars(module).items()
+        if inspect.isclass(v) and hasattr(v, "plan") and v.__module__ == module.__name__
+    ]
+
+
+def check_not_a_bare_file(text: str) -> None:
+    """A planner given as ``file.py`` without ``:Name``: say how to name it, and which
+    planner classes the file holds.
+
+    Raises:
+        PluginError: ``text`` names a Python file, not a planner.
+    """
+    if ":" in text or not text.endswith(".py"):
+        return
+    path = Path(text)
+    if not path.is_file():
+        raise PluginError(
+            f"planner {text!r} looks like a file, which needs its class too (as "
+            f"{text}:ClassName), and there is no file {path} (from {os.getcwd()})"
+        )
+    try:
+        found = _planner_classes(_import_file(path))
+    except Exception as exc:
+        raise PluginError(
+            f"planner {text!r} is a file, which needs its class too (as {text}:ClassName); "
+            f"importing it failed: {type(exc).__name__}: {exc}"
+        ) from exc
+    example = f"{text}:{found[0] if found else 'ClassName'}"
+    raise PluginError(
+        f"planner {text!r} is a file: name the class too, as {example} (its planner classes: "
+        f"{', '.join(found) or 'none'})"
+    )
 
 
 def _distribution(module: str) -> tuple[str | None, str | None]:

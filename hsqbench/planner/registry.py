@@ -228,10 +228,11 @@ def resolve_planner(name_or_spec: str) -> str:
             that cannot be loaded (:class:`~hsqbench.planner.plugins.PluginError`).
     """
     from hsqbench.names import near
-    from hsqbench.planner.plugins import is_spec
+    from hsqbench.planner.plugins import check_not_a_bare_file, is_spec
 
     if is_spec(name_or_spec):
         return register_spec(name_or_spec)
+    check_not_a_bare_file(name_or_spec)
     names = planner_names()
     if name_or_spec not in names:
         raise ValueError(

@@ -84,6 +84,17 @@ def test_bad_specs_say_what_is_wrong(tmp_path, spec, message):
         registry.resolve_planner(spec.format(path=path))
 
 
+def test_a_file_without_its_class_names_the_classes_it_holds(tmp_path):
+    """`--planner mine.py` (the class forgotten) listed every built-in planner instead."""
+    path = _write(tmp_path)
+    with pytest.raises(
+        plugins.PluginError, match=rf"is a file: name the class too, as {path}:Mine"
+    ):
+        registry.resolve_planner(str(path))
+    with pytest.raises(plugins.PluginError, match=r"needs its class too .* there is no file"):
+        registry.resolve_planner(str(tmp_path / "absent.py"))
+
+
 def test_a_name_taken_by_a_built_in_planner_is_refused(tmp_path):
     path = _write(tmp_path, name="hsq")
     with pytest.raises(plugins.PluginError, match=r"'hsq' .* is taken .* set another `name`"):
