@@ -42,6 +42,7 @@ class FakeBackend:
         objects of a group is refused by :meth:`placeable` (and raises if run anyway).
     unbuildable: objects that :meth:`prepare` reports as unusable (and whose trials raise).
     unknown: objects that :meth:`prepare` does not know (it raises ``ValueError``).
+    broken: planners whose every attempt ends in their own error (``planner_error``).
     """
 
     success: dict[str, float] = field(default_factory=dict)
@@ -53,6 +54,7 @@ class FakeBackend:
     unplaceable: tuple[tuple[str, ...], ...] = ()
     unbuildable: tuple[str, ...] = ()
     unknown: tuple[str, ...] = ()
+    broken: tuple[str, ...] = ()
     name: str = "fake"
     stop_rule: PackedConfig = field(default_factory=PackedConfig)
 
@@ -103,6 +105,8 @@ class FakeBackend:
             raise RuntimeError(f"fake backend failure for {what}")
 
     def _attempt(self, rng: np.random.Generator, planner: str, target: str) -> Attempt:
+        if planner in self.broken:
+            return Attempt(Outcome.PLANNER_ERROR, detail=f"fake: planner {planner!r} raised")
         p = self.success.get(planner, self.default_success)
         ok = bool(rng.random() < p)
         outcome = Outcome.SUCCESS if ok else _FAILURES[int(rng.integers(len(_FAILURES)))]

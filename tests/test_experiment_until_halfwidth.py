@@ -83,3 +83,21 @@ def test_the_report_names_the_seeds_that_ran_and_why(tmp_path: Path) -> None:
     write_report(run_dir)
     md = (run_dir / "tables.md").read_text()
     assert "base seeds [5, 0] (added until every GSR interval was within ±1 points: not " in md
+
+
+def test_the_summary_counts_the_planner_errors_of_every_step(tmp_path: Path) -> None:
+    run_dir = tmp_path / "run"
+    backend = FakeBackend(success={"hsq": 0.7}, broken=("antipodal",))
+    steps = []
+
+    def run_seeds(cfg, base_seeds, resume):
+        steps.append(base_seeds)
+        return run_benchmark(cfg, run_dir, backend=backend, resume=resume, progress=False,
+                             base_seeds=base_seeds)  # fmt: skip
+
+    summary = run_until_halfwidth(CONFIG, run_dir, 0.1, 3, run_seeds)
+    attempts = load_run(run_dir).attempts
+    broken = attempts[attempts["outcome"] == "planner_error"]
+    assert len(steps) > 1 and set(broken["planner"]) == {"antipodal"}
+    assert summary.planner_errors == len(broken) == (attempts["planner"] == "antipodal").sum()
+    assert summary.first_planner_error == "fake: planner 'antipodal' raised"

@@ -71,7 +71,7 @@ def run_until_halfwidth(
     resume: bool = False,
 ) -> RunSummary:
     """Run seed after seed until every GSR half-width is at most ``target``; returns the last
-    step's summary with the trials run and errors of all steps.
+    step's summary with the trials run, errors and planner errors of all steps.
 
     ``run_seeds(config, base_seeds, resume)`` runs the trials of those base seeds into
     ``run_dir`` (the command passes :func:`run_benchmark` with its options).
@@ -84,10 +84,13 @@ def run_until_halfwidth(
     sequence = seed_sequence(config.seeds, max_seeds)
     full = replace(config, seeds=sequence)
     count = len(config.seeds)
-    ran = errors = 0
+    ran = errors = planner_errors = 0
+    first_planner_error = ""
     while True:
         summary = run_seeds(full, sequence[:count], resume)
         resume, ran, errors = True, ran + summary.ran, errors + summary.errors
+        planner_errors += summary.planner_errors
+        first_planner_error = first_planner_error or summary.first_planner_error
         widths = gsr_halfwidths(run_dir, config.confidence)
         wide = {k: w for k, w in widths.items() if w > target}
         print(_progress(sequence[:count], widths, wide, target), file=sys.stderr)
@@ -96,6 +99,7 @@ def run_until_halfwidth(
         count += 1
     _record(run_dir, target, max_seeds, sequence[:count], widths, reached=not wide)
     summary.ran, summary.errors = ran, errors
+    summary.planner_errors, summary.first_planner_error = planner_errors, first_planner_error
     return summary
 
 
