@@ -140,6 +140,7 @@ def _chosen_keys(args: argparse.Namespace, rows: list[dict[str, str]]) -> list[s
 def _write_csv(path: Path, replayed: list) -> None:
     import csv
 
+    path.parent.mkdir(parents=True, exist_ok=True)  # as every output's folder is made
     with path.open("w", newline="") as f:
         out = csv.writer(f)
         out.writerow(["trial_key", "attempt_index", "recorded", "replayed", "exact", "detail"])
@@ -154,8 +155,6 @@ def run(args: argparse.Namespace) -> int:
 
     if args.limit < 1:
         raise CommandError(f"--limit must be >= 1, got {args.limit}")
-    if args.out is not None and not args.out.parent.is_dir():
-        raise CommandError(f"--csv {args.out}: folder {args.out.parent} does not exist")
     rows = run_rows(args.run)
     config = run_trial_config(args.run, _overrides(args.set))
     keys = _chosen_keys(args, rows)
