@@ -459,17 +459,17 @@ def test_going_home_backs_out_of_an_object_still_touching_a_finger(config, monke
     an object touches a finger (one left in the bin hooked on it stays there), then rises and
     goes home; with nothing on the fingers it rises at once."""
     from hsqbench.sim.judge import SceneProbe
-    from hsqbench.sim.trial import protocols
+    from hsqbench.sim.trial import release
 
     withdrawn = []
-    monkeypatch.setattr(protocols, "withdraw", lambda env: withdrawn.append(1) or "")
+    monkeypatch.setattr(release, "withdraw", lambda env: withdrawn.append(1) or "")
     with TrialEnv.build("packed", ["proc_box"], 5, config) as env:
-        protocols.return_home(env)
+        release.return_home(env)
         assert withdrawn == []
         n = len(env.probe.names)
         monkeypatch.setattr(
             SceneProbe, "finger_contacts", lambda self, data: np.ones((n, 2), dtype=bool)
         )
-        protocols.return_home(env)
+        release.return_home(env)
         assert withdrawn == [1]
         assert np.abs(env.panda.arm_q(env.data) - env.panda.home_arm_q).max() < 0.01

@@ -26,7 +26,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from hsqbench.sim.clutter.round import STREAMS, plan_step
+from hsqbench.sim.clutter.step import plan_step, round_streams
 from hsqbench.sim.clutter.world import ClutterWorld, camera_eyes, look_at_quat
 from hsqbench.sim.motion import SimUnstable
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
@@ -45,27 +45,19 @@ def cube_origin(world: ClutterWorld, table_top_z: float) -> np.ndarray:
     return np.array([xy[0], xy[1], table_top_z - world.config.scene.table_height_m])
 
 
-def arm_env(world: ClutterWorld, kind: str, seed: int, config: Any) -> tuple[Any, np.ndarray]:
-    """A :class:`~hsqbench.sim.trial.env.TrialEnv` of the harness's scene with the world's
-    objects in play at their poses (shifted into the arm's frame) and their camera(s); returns
-    it with their frame's origin in the arm's world."""
-    from hsqbench.sim.scene import load_world
-    from hsqbench.sim.trial.env import TrialEnv
-
-    clutter, sc = world.config, world.config.scene
-    names = [n for n in world.objects if n in world.in_play]
-    assets = [world.assets[n] for n in names]
-    probe = load_world(config.scene, config.physics).compile()
-    table_top = float(probe.geom("table").pos[2] + probe.geom("table").size[2])
-    origin = cube_origin(world, table_top)
+def _arm_spec(world: ClutterWorld, config: Any, origin: np.ndarray, names: list[str]) -> Any:
+    """The harness's scene spec with the objects in play at their poses moved by ``origin`` and
+    their camera(s) moved with them."""
+    clutter = world.config
     poses = []
     for n in names:
         pose = world.pose(n)
         pose[:3] += origin
         poses.append(pose)
     scales = [world.scales[n] for n in names]
+    assets = [world.assets[n] for n in names]
     spec = compose_posed(assets, poses, config.scene, config.robot, config.physics, scales)
-    eyes, target = camera_eyes(clutter.camera, sc.size_m)
+    eyes, target = camera_eyes(clutter.camera, clutter.scene.size_m)
     for i, eye in enumerate(eyes):
         spec.worldbody.add_camera(
             name=f"{CAMERA_PREFIX}{i}",
@@ -74,47 +66,40 @@ def arm_env(world: ClutterWorld, kind: str, seed: int, config: Any) -> tuple[Any
             fovy=clutter.camera.fovy_deg,
             resolution=[clutter.camera.width_px, clutter.camera.height_px],
         )
-    built = compile_settled(spec, names, config.robot, config.physics)
-    info = describe_scene(
-        built.model,
-        built.data,
-        config.scene,
-        config.robot,
-        kind,
-        seed,
-        names,
-        built.bodies,
-        built.body_ids,
-        built.panda,
-    )
-    cams = clutter.camera
-    if clutter.arm_sensing == "theirs":
+    return spec
+
+
+def arm_env(world: ClutterWorld, kind: str, seed: int, config: Any) -> tuple[Any, np.ndarray]:
+    """A :class:`~hsqbench.sim.trial.env.TrialEnv` of the harness's scene with the world's
+    objects in play at their poses (shifted into the arm's frame) and their camera(s); returns
+    it with their frame's origin in the arm's world."""
+    from hsqbench.sim.scene import load_world
+    from hsqbench.sim.trial.env import TrialEnv
+
+    clutter = world.config
+    names = [n for n in world.objects if n in world.in_play]
+    table = load_world(config.scene, config.physics).compile().geom("table")
+    origin = cube_origin(world, float(table.pos[2] + table.size[2]))
+    built = compile_settled(_arm_spec(world, config, origin, names), names, config.robot,
+                            config.physics)  # fmt: skip
+    info = describe_scene(built.model, built.data, config.scene, config.robot, kind, seed, names,
+                          built.bodies, built.body_ids, built.panda)  # fmt: skip
+    theirs = clutter.arm_sensing == "theirs"
+    if theirs:
+        cam = clutter.camera
         info.depth_cameras = tuple(
             DepthCamera(
-                f"{CAMERA_PREFIX}{i}",
-                cams.width_px,
-                cams.height_px,
-                cams.fovy_deg,
-                cams.min_range_m,
-                cams.max_range_m,
+                name, cam.width_px, cam.height_px, cam.fovy_deg, cam.min_range_m, cam.max_range_m
             )
-            for i in range(len(eyes))
+            for name in (built.model.camera(i).name for i in range(built.model.ncam))
+            if name.startswith(CAMERA_PREFIX)
         )
-    # Their cloud's crop (round._perception) in the arm's frame.
-    info.workspace_min = origin + np.array([0.02, 0.02, sc.table_height_m])
-    info.workspace_max = origin + np.array([sc.size_m - 0.02, sc.size_m - 0.02, sc.size_m])
-    theirs = clutter.arm_sensing == "theirs"
+    lo, hi = world.crop_box()
+    info.workspace_min, info.workspace_max = origin + lo, origin + hi
     perception = clutter.perception if theirs else config.perception
     env_config = dataclasses.replace(config, perception=perception, graspability=None)
-    env = TrialEnv(
-        built.model,
-        built.data,
-        info,
-        {a.name: a for a in assets},
-        env_config,
-        seed,
-        NullRecorder(),
-    )
+    assets = {n: world.assets[n] for n in names}
+    env = TrialEnv(built.model, built.data, info, assets, env_config, seed, NullRecorder())
     return env, origin
 
 
@@ -140,17 +125,16 @@ def _remove_and_wait(env: Any, origin: np.ndarray, world: ClutterWorld) -> list[
 
 
 def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, config: Any) -> Any:
-    """The round of :func:`hsqbench.sim.clutter.round.run_clutter_round` with the arm (module
+    """The round of :func:`hsqbench.sim.clutter.round.run_hand_round` with the arm (module
     notes); ``world`` is the generated scene of their world."""
     from hsqbench.sim.trial.attempt import resolve_planner
-    from hsqbench.sim.trial.protocols import return_home
+    from hsqbench.sim.trial.release import return_home
 
     plan_with = resolve_planner(planner, config)
     name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
     presented = [n for n in world.objects if n in world.in_play]
     env, origin = arm_env(world, kind, seed, config)
-    streams = np.random.SeedSequence([seed, 1]).spawn(len(STREAMS))
-    rngs = {n: np.random.default_rng(s) for n, s in zip(STREAMS, streams, strict=True)}
+    rngs = round_streams(seed)
     env.rngs.update({n: rngs[n] for n in ("perception_calibration", "perception_noise")})
     attempts: list[Attempt] = []
     cleared: list[str] = []
@@ -189,11 +173,8 @@ def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, confi
 
 
 def _arm_attempt(env: Any, planner: Any, kind: str, config: Any, rngs: dict) -> Attempt:
-    """Look, plan (:func:`~hsqbench.sim.clutter.round.plan_step`), motion-plan and execute one
+    """Look, plan (:func:`~hsqbench.sim.clutter.step.plan_step`), motion-plan and execute one
     grasp with the arm."""
-    from hsqbench.sim.trial.attempt import AttemptTrace, plan_motions
-    from hsqbench.sim.trial.execution import execute_grasp
-
     t0 = time.perf_counter()
     try:
         look = env.look()
@@ -211,9 +192,17 @@ def _arm_attempt(env: Any, planner: Any, kind: str, config: Any, rngs: dict) -> 
     )
     if planned.ended is not None:
         return planned.ended
-    grasps, points, common = planned.grasps, planned.points, planned.common
+    return _arm_execute(env, planned.grasps, planned.points, planned.common, config)
+
+
+def _arm_execute(env: Any, grasps: Any, points: Any, common: dict, config: Any) -> Attempt:
+    """Motion-plan the grasps in order and execute the first reachable one with the arm, up to
+    ``clutter.arm_until``."""
+    from hsqbench.sim.trial.attempt import AttemptTrace, plan_motions
+    from hsqbench.sim.trial.execution import execute_grasp
+
     trace = AttemptTrace()
-    t2 = time.perf_counter()
+    t0 = time.perf_counter()
     chosen = plan_motions(env, grasps, points, trace)
     if chosen.motion is None:
         top = grasps[0]
@@ -224,7 +213,7 @@ def _arm_attempt(env: Any, planner: Any, kind: str, config: Any, rngs: dict) -> 
             width_m=float(top.width),
             grasp_pose=pose7(top.position, top.rotation),
             ranks_tried=trace.ranks_tried,
-            execution_s=time.perf_counter() - t2,
+            execution_s=time.perf_counter() - t0,
             detail=chosen.reasons[0] if chosen.reasons else "no reachable grasp",
             **common,
         )
@@ -245,7 +234,7 @@ def _arm_attempt(env: Any, planner: Any, kind: str, config: Any, rngs: dict) -> 
         score=float(grasp.score),
         factors={k: float(v) for k, v in grasp.factors.items()},
         width_m=float(grasp.width),
-        execution_s=time.perf_counter() - t2,
+        execution_s=time.perf_counter() - t0,
         grasp_pose=pose7(motion.grasp_pose.position, motion.grasp_pose.rotation),
         grasp_flipped=motion.flipped,
         sim_time_s=sim_time,

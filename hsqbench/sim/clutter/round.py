@@ -15,32 +15,21 @@ raises or breaks its contract is a ``planner_error`` attempt, which ends the rou
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from hsqbench.planner.failure import PlannerError, checked_plan
 from hsqbench.sim.clutter.execution import execute_hand_grasp
-from hsqbench.sim.clutter.scenes import build_clutter_scene
+from hsqbench.sim.clutter.step import plan_step, round_streams
 from hsqbench.sim.clutter.world import ClutterWorld
-from hsqbench.sim.objects import ObjectLike
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
 from hsqbench.sim.recorded_pose import pose7
-
-#: Independent random streams drawn from a round's seed (the scene has the seed itself).
-STREAMS = ("perception_calibration", "perception_noise", "planner", "oracle")
 
 
 def _perception(world: ClutterWorld, rng: np.random.Generator) -> Any:
     from hsqbench.sim.perception import Perception
 
-    sc = world.config.scene
-    # Their cloud's crop (``place_table``): 2 cm inside the cube's sides, up to its top; the
-    # table goes by perception's table margin.
-    lo = np.array([0.02, 0.02, sc.table_height_m])
-    hi = np.array([sc.size_m - 0.02, sc.size_m - 0.02, sc.size_m])
+    lo, hi = world.crop_box()
     return Perception(
         world.model,
         world.cameras,
@@ -61,31 +50,19 @@ def _truth(world: ClutterWorld, rng: np.random.Generator) -> Any:
     )
 
 
-def run_clutter_round(
-    objects: Sequence[str | ObjectLike],
-    seed: int,
-    planner: Any,
-    config: Any,
-    kind: str = "packed",
+def run_hand_round(
+    world: ClutterWorld, kind: str, seed: int, planner: Any, config: Any
 ) -> RoundResult:
-    """A round of VGN/GIGA's clutter removal with ``planner`` (a name or a planner) under the
-    trial config ``config`` whose ``clutter`` is set (its robot hand, physics, planners,
-    ``min_cloud_points`` and ``recorded_scores`` apply)."""
+    """The round on the generated ``world`` with the free hand (module notes); ``planner`` a
+    name or a planner, ``config`` the trial config (its planners, ``min_cloud_points`` and
+    ``recorded_scores`` apply)."""
     from hsqbench.sim.trial.attempt import resolve_planner
 
-    clutter = config.clutter
-    if clutter is None:
-        raise ValueError("run_clutter_round needs a trial config with clutter: set")
+    clutter = world.config
     plan_with = resolve_planner(planner, config)
     name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
-    world = build_clutter_scene(kind, objects, seed, clutter, config.robot, config.physics)
-    if clutter.executor == "arm":
-        from hsqbench.sim.clutter.arm import run_arm_round
-
-        return run_arm_round(world, kind, seed, planner, config)
     presented = [n for n in world.objects if n in world.in_play]
-    streams = np.random.SeedSequence([seed, 1]).spawn(len(STREAMS))
-    rngs = {n: np.random.default_rng(s) for n, s in zip(STREAMS, streams, strict=True)}
+    rngs = round_streams(seed)
     perception = _perception(world, rngs["perception_calibration"])
     attempts: list[Attempt] = []
     cleared: list[str] = []
@@ -117,76 +94,6 @@ def run_clutter_round(
         scene_max_speed=float("nan"),
         objects_unplaced=[n for n in world.objects if n not in presented],
     )
-
-
-@dataclass
-class Planned:
-    """A look and a plan: ``ended`` when the step ends without a grasp (too few points, no
-    grasp, the planner's own error), else the planner's ``grasps`` and what every attempt
-    records (``common``)."""
-
-    ended: Attempt | None
-    grasps: Sequence[Any] = ()
-    points: Any = None
-    common: dict[str, Any] = field(default_factory=dict)
-
-
-def plan_step(
-    obs: Any,
-    perception_s: float,
-    planner: Any,
-    kind: str,
-    config: Any,
-    seed: int,
-    support_plane: Any,
-    truth: Callable[[], Any],
-) -> Planned:
-    """Plan on one observation as their loop does (the cloud, the depth images, the table plane
-    and the workspace; ``truth`` is called for a privileged planner only)."""
-    from hsqbench.planner.api import PlanningContext
-
-    points = np.asarray(obs.points)
-    privileged = getattr(planner, "privileged", False)
-    if len(points) < config.min_cloud_points and not privileged:
-        detail = f"the cloud has {len(points)} points (fewer than {config.min_cloud_points})"
-        return Planned(Attempt(Outcome.NO_GRASP_FOUND, perception_s=perception_s, detail=detail))
-    context = PlanningContext(
-        support_plane=tuple(float(x) for x in support_plane),
-        packed=True,
-        seed=seed,
-        camera_positions=np.asarray(obs.camera_positions),
-        workspace_bounds=(obs.workspace_min, obs.workspace_max),
-        truth=truth() if privileged else None,
-        scene=kind,
-        depth_views=getattr(obs, "cameras", None),
-    )
-    t1 = time.perf_counter()
-    try:
-        plan = checked_plan(planner, points, context)
-    except PlannerError as exc:  # the planner's own failure: a failed attempt without a grasp
-        planning_s = time.perf_counter() - t1
-        return Planned(
-            Attempt(
-                Outcome.PLANNER_ERROR,
-                perception_s=perception_s,
-                planning_s=planning_s,
-                detail=str(exc),
-            )
-        )
-    planning_s = time.perf_counter() - t1
-    grasps = plan.grasps
-    n_top = min(len(grasps), config.recorded_scores)
-    common = {
-        "n_grasps": len(grasps),
-        "perception_s": perception_s,
-        "planning_s": planning_s,
-        "top_scores": tuple(float(grasps[i].score) for i in range(n_top)),
-        "planner_stages_s": {k: float(v) for k, v in plan.timings.items()},
-    }
-    if not len(grasps):
-        detail = plan.reason or "the planner returned no grasp"
-        return Planned(Attempt(Outcome.NO_GRASP_FOUND, detail=detail, **common))
-    return Planned(None, grasps, points, common)
 
 
 def _attempt(

@@ -27,6 +27,8 @@ Array = NDArray[np.float64]
 OBJECT_PREFIX = "obj/"
 TABLE = "table"
 WALL_PREFIX = "pile_wall"
+#: Their cloud's crop lies this far inside the cube's sides (``place_table``: lx, ly = 0.02).
+CROP_INSET_M = 0.02
 #: Geom group of the pile box's walls: not one the cameras draw (they are gone before a look).
 WALL_GROUP = 4
 
@@ -97,6 +99,14 @@ class ClutterWorld:
     @property
     def support_plane(self) -> Array:
         return np.array([0.0, 0.0, 1.0, -self.table_z])
+
+    def crop_box(self) -> tuple[Array, Array]:
+        """Their cloud's crop (``place_table``'s bounds): 2 cm inside the cube's sides, from the
+        table top to the cube's top (the table itself goes by perception's table margin)."""
+        sc = self.config.scene
+        lo = np.array([CROP_INSET_M, CROP_INSET_M, sc.table_height_m])
+        hi = np.array([sc.size_m - CROP_INSET_M, sc.size_m - CROP_INSET_M, sc.size_m])
+        return lo, hi
 
     # ---- objects -------------------------------------------------------------------------------
     def _qadr(self, name: str) -> int:

@@ -6,7 +6,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from hsqbench.sim.ik import Pose
 from hsqbench.sim.motion import SimUnstable
 from hsqbench.sim.objects import ObjectLike
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult, TrialResult
@@ -14,29 +13,7 @@ from hsqbench.sim.recorder import Recorder
 from hsqbench.sim.trial.attempt import AttemptTrace, resolve_planner, run_attempt
 from hsqbench.sim.trial.config import TrialConfig, load_trial_config
 from hsqbench.sim.trial.env import TrialEnv
-from hsqbench.sim.trial.release import open_hand_contacts, withdraw
-
-
-def return_home(env: TrialEnv) -> None:
-    """Open the hand, back out along the approach while an object still touches a finger (a
-    cup or bag in the bin hooked on one would otherwise be lifted out with the hand), rise, and
-    go home (between the attempts of a packed round), with :func:`open_hand_contacts`."""
-    st, panda, d = env.stepper, env.panda, env.data
-    st.phase = "home"
-    with open_hand_contacts(env):
-        st.open_hand(panda.max_width() - env.config.execution.release_gap_m)
-        if env.probe.finger_contacts(d).any():
-            withdraw(env)
-        env.ik.sync(d)
-        here = Pose(*panda.tcp_pose(d))
-        up = env.ik.solve(
-            here.moved([0.0, 0.0, env.config.execution.retreat_height_m]),
-            panda.arm_q(d),
-            restarts=env.config.execution.resolve_restarts,
-        )
-        if up.ok:
-            st.move_joints(up.q, settle=False)
-        st.move_joints(panda.home_arm_q)
+from hsqbench.sim.trial.release import return_home
 
 
 def _planner_name(planner: Any) -> str:
@@ -136,7 +113,7 @@ def run_packed_round(
         raise ValueError(f"a clutter-removal round is packed or pile, got {kind!r}")
     cfg = config if config is not None else load_trial_config()
     if cfg.clutter is not None:
-        from hsqbench.sim.clutter.round import run_clutter_round
+        from hsqbench.sim.clutter.protocol import run_clutter_round
 
         return run_clutter_round(objects or [], seed, planner, cfg, kind)
     rule = cfg.pile if kind == "pile" else cfg.packed

@@ -146,3 +146,25 @@ def withdraw(env: TrialEnv) -> str:
     env.stepper.follow(line_trajectory(env, waypoints, made, "lift"), ())
     env.stepper.hold(env.config.motion.fall_time_s)
     return f" (withdrawn {made * 100:.0f} cm to free it from the fingers)"
+
+
+def return_home(env: TrialEnv) -> None:
+    """Open the hand, back out along the approach while an object still touches a finger (a
+    cup or bag in the bin hooked on one would otherwise be lifted out with the hand), rise, and
+    go home (between the attempts of a packed round), with :func:`open_hand_contacts`."""
+    st, panda, d = env.stepper, env.panda, env.data
+    st.phase = "home"
+    with open_hand_contacts(env):
+        st.open_hand(panda.max_width() - env.config.execution.release_gap_m)
+        if env.probe.finger_contacts(d).any():
+            withdraw(env)
+        env.ik.sync(d)
+        here = Pose(*panda.tcp_pose(d))
+        up = env.ik.solve(
+            here.moved([0.0, 0.0, env.config.execution.retreat_height_m]),
+            panda.arm_q(d),
+            restarts=env.config.execution.resolve_restarts,
+        )
+        if up.ok:
+            st.move_joints(up.q, settle=False)
+        st.move_joints(panda.home_arm_q)
