@@ -166,7 +166,10 @@ def test_packed_rows_carry_the_clearance_rate(tmp_path, sweep):
 
 
 def test_packed_points_are_paired_with_the_default_on_the_clearance_rate(tmp_path, sweep):
-    packed = replace(sweep, experiments=("packed",), parameters=sweep.parameters[1:])
+    # CR is tested over rounds: four seeds of three rounds, enough for a verdict after Holm.
+    packed = replace(
+        sweep, seeds=(0, 1, 2, 3), experiments=("packed",), parameters=sweep.parameters[1:]
+    )
     run_sweep(packed, tmp_path / "sw", backend_factory=fake, progress=False)
     q = pd.read_csv(tmp_path / "sw" / CSV_FILE).set_index(["value", "planner"])
     assert np.isnan(q.loc[("default", "a"), "vs_default_difference_pp"])
@@ -177,6 +180,7 @@ def test_packed_points_are_paired_with_the_default_on_the_clearance_rate(tmp_pat
             low["cr_percent"] - default["cr_percent"], abs=0.01
         )
     assert q.loc[("low", "a"), "vs_default_verdict"] == "worse"
+    assert q.loc[("low", "a"), "vs_default_p_value"] <= q.loc[("low", "a"), "vs_default_p_holm"]
 
 
 def test_point_config_sizes_the_protocol_and_keeps_only_the_sweeps_experiments(sweep):
@@ -337,6 +341,7 @@ def test_isolated_points_are_paired_with_the_default_point(tmp_path, sweep):
         )
     # Planner a succeeds with p 0.1 against 0.8 at the default: a clear loss.
     assert q.loc[("low", "a"), "vs_default_verdict"] == "worse"
+    assert q.loc[("low", "a"), "vs_default_p_value"] <= q.loc[("low", "a"), "vs_default_p_holm"]
     assert q.loc[("low", "a"), "vs_default_p_value"] < 0.05
     # sweep.md shows the same: the default marked, a's loss at "low" in bold with its p.
     md = (root / "sweep.md").read_text()

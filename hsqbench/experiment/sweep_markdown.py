@@ -1,6 +1,6 @@
 """``sweep.md``: the sweep table as Markdown, one table per parameter and protocol; each cell the
-planner's rate at the point and its paired difference to the default point (bold when McNemar's
-test calls it a difference)."""
+planner's rate at the point and its paired difference to the default point (bold when the
+Holm-adjusted p of that point's comparison with its default calls it a difference)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ def _cell(r: Any) -> str:
     diff += f"{signed_pp(r.vs_default_ci_high_pp)}]"
     if r.vs_default_verdict != SAME:
         diff = f"**{diff}**"
-    return f"{rate}; {diff}, p {p_text(r.vs_default_p_value)}"
+    return f"{rate}; {diff}, p {p_text(r.vs_default_p_holm)}"
 
 
 def sweep_markdown(table: pd.DataFrame, meta: dict[str, Any]) -> str:
@@ -33,9 +33,11 @@ def sweep_markdown(table: pd.DataFrame, meta: dict[str, Any]) -> str:
         "# Sweep results",
         "",
         "Per point and planner: GSR % (successes/n; packed: and CR %) and the paired difference "
-        "to the parameter's default point on the same presentations (isolated: GSR; packed "
-        "and pile: CR), in percentage points with its 95 % interval (Newcombe) and the exact "
-        "McNemar p; bold: a difference at that level. Intervals of the rates are in sweep.csv.",
+        "to the parameter's default point on the same presentations (isolated: GSR, Newcombe's "
+        "95 % interval and the exact McNemar test; packed and pile: CR over rounds, bootstrap "
+        "interval and exact sign-flip test), in percentage points; p Holm-adjusted over the "
+        "planners' tests of the point against its default, as `hsqbench compare` does; bold: a "
+        "difference after the adjustment. Intervals of the rates are in sweep.csv.",
     ]
     for name, param in meta["parameters"].items():
         rows = table[table["parameter"] == name]

@@ -10,9 +10,9 @@ failures) are counted in ``errors`` and left out of the rates, as in the report'
 Every point runs the same presentations, so each point is also compared with its parameter's
 default point (the one without overrides) as ``hsqbench compare`` compares two runs
 (:mod:`hsqbench.experiment.run_compare`): isolated GSR over paired attempts, packed and pile CR
-over the objects of paired rounds. ``vs_default_*`` hold the difference in percentage points
-with Newcombe's interval, the exact McNemar p and the verdict; empty at the default itself and
-where a sweep has no default point.
+over paired rounds. ``vs_default_*`` hold the difference in percentage points with its interval,
+the p-value, the p Holm-adjusted over that point's tests against its default (one ``compare``)
+and the verdict from it; empty at the default itself and where a sweep has no default point.
 """
 
 from __future__ import annotations
@@ -55,6 +55,7 @@ COLUMNS = (
     "vs_default_ci_low_pp",
     "vs_default_ci_high_pp",
     "vs_default_p_value",
+    "vs_default_p_holm",
     "vs_default_verdict",
     "planner_errors",
     "errors",
@@ -116,7 +117,7 @@ def run_rows(data: RunData, experiments: list[str]) -> list[dict[str, Any]]:
 
 #: ``run_differences``' comparison -> the experiment of a sweep row.
 COMPARED = {"isolated GSR": "isolated", "packed CR": "packed", "pile CR": "pile"}
-PAIRED = ("difference_pp", "ci_low_pp", "ci_high_pp", "p_value", "verdict")
+PAIRED = ("difference_pp", "ci_low_pp", "ci_high_pp", "p_value", "p_holm", "verdict")
 
 
 def default_point(param: dict[str, Any]) -> dict[str, Any] | None:
