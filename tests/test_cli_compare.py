@@ -205,6 +205,20 @@ def test_part_with_seeds_the_full_run_lacks_is_refused(hsq_run, tmp_path, capsys
     assert "base seeds [7] are not among" in capsys.readouterr().err
 
 
+def test_part_with_another_draw_for_a_round_it_ran_is_refused(hsq_run, tmp_path, capsys) -> None:
+    import json
+
+    part = tmp_path / "part"
+    shutil.copytree(hsq_run, part)
+    meta = json.loads((part / "run.json").read_text())
+    first = sorted(meta["packed_draws"])[0]
+    meta["packed_draws"][first]["objects"] = ["dice", "fork", "knife", "plate", "spoon"]
+    (part / "run.json").write_text(json.dumps(meta))
+    assert main(["compare", str(hsq_run), str(part), "--part"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"round {first} drew other objects" in err[0]
+
+
 def test_fail_if_worse_judges_by_holm_adjusted_p(hsq_run, tmp_path, capsys) -> None:
     """Packed CR is tested over rounds: a few objects lost in a few rounds is not a regression."""
     b = tmp_path / "b"
