@@ -124,7 +124,7 @@ class VolumetricConfig:
     weights: dict[str, str] = field(
         default_factory=lambda: {"isolated": "packed", "packed": "packed", "pile": "pile"}
     )
-    input: Literal["fused", "per_view"] = "fused"
+    input: Literal["fused", "per_view"] = "per_view"
     merge: Literal["best"] = "best"
     max_cubes_per_axis: int = 3
     pads_beyond_tcp_m: float = 0.041
