@@ -147,3 +147,19 @@ def test_elimination_variant_keeps_only_grasps_that_pass_the_rules(planner, plan
     # (with torch-cluster's CPU neighbourhoods 0, 0, 2, 8 and 5).
     assert len(survivors) >= 60
     assert all(closes_on_opposite_faces(g) for g in survivors)
+
+
+def test_per_image_views_run_each_cameras_own_points(planner):
+    """views: per_image: each camera's part of the cloud read off its depth image, one network
+    pass per camera (as the network was trained on one view); without images, one clear line."""
+    from tests.volumetric_scene import render
+
+    lower, upper = BOX.center - BOX.half_extents, BOX.center + BOX.half_extents
+    views = tuple(render(c, [(lower, upper)]) for c in CAMERAS)
+    per_image = type(planner)(dataclasses.replace(planner.config, views="per_image"))
+    ctx = PlanningContext(support_plane=TABLE, seed=0, camera_positions=CAMERAS, depth_views=views)
+    result = per_image.plan(box_cloud(), ctx)
+    assert result.grasps
+    assert sum(closes_on_opposite_faces(g) for g in result.grasps[:10]) >= 5
+    with pytest.raises(ValueError, match="depth_views"):
+        per_image.plan(box_cloud(), context())

@@ -120,6 +120,32 @@ def test_visible_from_keeps_the_faces_a_camera_sees():
     assert np.count_nonzero(got & ~truth) / np.count_nonzero(got) < 0.1
 
 
+def test_seen_in_image_keeps_the_points_that_cameras_depth_measured():
+    from tests.volumetric_scene import render
+
+    rng = np.random.default_rng(4)
+    box = Box((0.03, 0.05, 0.04), center=np.array([0.5, 0.0, 0.04]))
+    points, _ = box.sample_surface(20000, rng)
+    points = points[points[:, 2] > 1e-3]  # the table hides the bottom face
+    lower, upper = box.center - box.half_extents, box.center + box.half_extents
+    for camera in ([0.62, 0.78, 0.55], [0.62, -0.78, 0.55]):
+        view = render(np.array(camera), [(lower, upper)])
+        got = frames.seen_in_image(points, view, 0.01)
+        # The camera's side (+y or -y face) and the top are its own; of the far side only the
+        # points within the tolerance of a surface the camera sees in front of or behind them:
+        # the top face, the +x face (the camera is at x 0.62) and the table.
+        facing = np.sign(points[:, 1] - box.center[1]) == np.sign(camera[1])
+        side = np.abs(np.abs(points[:, 1] - box.center[1]) - 0.05) < 1e-6
+        assert got[side & facing].mean() > 0.95
+        far = got & side & ~facing
+        near_seen = (points[:, 2] > upper[2] - 0.01) | (points[:, 2] < 0.01)
+        assert np.all(near_seen[far] | (points[far, 0] > upper[0] - 0.01))
+        assert far.sum() < 0.15 * (side & ~facing).sum()
+        assert got[points[:, 2] > 0.08 - 1e-6].mean() > 0.95
+    # A point behind the camera, or with no depth at its pixel, is not seen.
+    assert not frames.seen_in_image(np.array([[0.62, 2.0, 0.55]]), view, 0.01).any()
+
+
 def test_config_file_loads_and_bad_values_are_named():
     cfg = load_contact_graspnet_config()
     assert isinstance(cfg, ContactGraspNetConfig)

@@ -26,8 +26,12 @@ class ContactGraspNetConfig:
             axes, z up, origin at the cloud's mean: how the cgn-pytorch weights were trained)
             or ``camera`` (a camera's optical frame, z forward: the original TensorFlow
             release's convention).
-        views: ``fused`` (the fused cloud in one pass) or ``per_camera`` (each camera's
-            visible part on its own, grasps merged).
+        views: ``fused`` (the fused cloud in one pass), ``per_camera`` (each camera's
+            visible part by hidden point removal on its own, grasps merged) or ``per_image``
+            (each camera's part read off its own depth image, as the network was trained on
+            one rendered view; grasps merged).
+        image_tolerance_m: with ``per_image``, a cloud point belongs to a camera when it lies
+            within this distance of the depth that camera's image measured along its pixel.
         table_patch_radius_m: the network was trained on scenes with the table in view; the
             harness removes it, so a synthetic table patch of this radius around the object,
             on the support plane, is added to the network's input (its grasps on the patch are
@@ -52,7 +56,8 @@ class ContactGraspNetConfig:
 
     planner: str = "planner"
     input_frame: Literal["world_centred", "camera"] = "world_centred"
-    views: Literal["fused", "per_camera"] = "fused"
+    views: Literal["fused", "per_camera", "per_image"] = "fused"
+    image_tolerance_m: float = 0.01
     table_patch_radius_m: float = 0.3
     table_spacing_m: float = 0.005
     input_voxel_m: float = 0.003
@@ -73,7 +78,13 @@ class ContactGraspNetConfig:
             value = getattr(self, key)
             if not (np.isfinite(value) and value >= 0):
                 raise ValueError(f"contact_graspnet.{key} must be >= 0 m, got {value}")
-        for key in ("table_spacing_m", "gripper_depth_m", "width_ray_radius_m", "width_reach_m"):
+        for key in (
+            "table_spacing_m",
+            "gripper_depth_m",
+            "image_tolerance_m",
+            "width_ray_radius_m",
+            "width_reach_m",
+        ):
             value = getattr(self, key)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"contact_graspnet.{key} must be > 0 m, got {value}")

@@ -5,8 +5,10 @@ A learned 6-DoF grasp detector for the Franka hand, run through the PyTorch port
 
 1. Clean the cloud as hsq and the baselines do (``cleaning:`` of the planner config named by
    ``planner``), so all planners see the same points.
-2. Views (``views``): the fused cloud, or each camera's visible part (hidden point removal from
-   the camera's position, :func:`~.frames.visible_from`); grasps of the views are merged.
+2. Views (``views``): the fused cloud, or each camera's part (``per_camera``: hidden point
+   removal from the camera's position, :func:`~.frames.visible_from`; ``per_image``: the points
+   its own depth image measured, :func:`~.frames.seen_in_image`, one view as in training);
+   grasps of the views are merged.
 3. Each view goes to the network in its input frame (``input_frame``: world axes centred on the
    view's mean, as the cgn-pytorch weights were trained, or a look-at camera frame at the camera;
    for the fused cloud that camera sits at the mean of the camera positions), at the network's
@@ -57,8 +59,24 @@ Array = NDArray[np.float64]
 FAMILY = "cgn"
 
 
-def _views(cloud: Array, cameras: Array | None, cfg: ContactGraspNetConfig) -> list:
+def _views(
+    cloud: Array, cameras: Array | None, cfg: ContactGraspNetConfig, depth_views=None
+) -> list:
     """``(points, camera or None)`` of each view the network gets."""
+    if cfg.views == "per_image":
+        if not depth_views:
+            raise ValueError(
+                "contact_graspnet views='per_image' reads each camera's depth image "
+                "(PlanningContext.depth_views); the harness's trials pass them, or set "
+                "views: fused"
+            )
+        return [
+            (
+                cloud[frames.seen_in_image(cloud, v, cfg.image_tolerance_m)],
+                np.asarray(v.T_world_camera, dtype=np.float64)[:3, 3],
+            )
+            for v in depth_views
+        ]
     if (cfg.views == "per_camera" or cfg.input_frame == "camera") and cameras is None:
         raise ValueError(
             f"contact_graspnet views={cfg.views!r}, input_frame={cfg.input_frame!r} need "
@@ -101,13 +119,14 @@ def predict(
     seed: int,
     elimination_voxel_m: float,
     max_opening_m: float,
+    depth_views=None,
 ) -> tuple[Array, Array, Array, Array]:
     """Network grasps on the object cloud: (``P_G`` (G, 3), rotations (G, 3, 3), widths (G,),
     confidence (G,)), world frame, best confidence first, threshold applied."""
     device = network.resolve_device(cfg.device)
     up = np.array([0.0, 0.0, 1.0]) if plane is None else plane[:3]
     centres, rotations, contacts, conf = [], [], [], []
-    for i, (points, camera) in enumerate(_views(cloud, cameras, cfg)):
+    for i, (points, camera) in enumerate(_views(cloud, cameras, cfg, depth_views)):
         if points.shape[0] < 64:
             continue  # a camera that sees (almost) nothing of the object
         net_in, n_object = _network_input(points, plane, cfg)
@@ -244,7 +263,14 @@ class ContactGraspNetPlanner(PlannerBase):
         tick = time.perf_counter()
         seed = 0 if context.seed is None else int(context.seed)
         positions, rotations, widths, conf = predict(
-            clean.points, cameras, plane, cfg, seed, gcfg.elimination_voxel_m, grip.max_opening_m
+            clean.points,
+            cameras,
+            plane,
+            cfg,
+            seed,
+            gcfg.elimination_voxel_m,
+            grip.max_opening_m,
+            context.depth_views,
         )
         timings["network"] = time.perf_counter() - tick
 

@@ -19,6 +19,8 @@ release on one camera's optical frame (x right, y down, z forward). Both are off
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull
@@ -122,3 +124,23 @@ def visible_from(points: Array, camera: Array, radius_factor: float = 1e4) -> ND
     mask = np.zeros(points.shape[0] + 1, dtype=bool)
     mask[hull.vertices] = True
     return mask[:-1]
+
+
+def seen_in_image(points: Array, view: Any, tolerance_m: float) -> NDArray[np.bool_]:
+    """Points (N, 3) that a depth image measured: those projecting into the image (nearest
+    pixel) within ``tolerance_m`` of the planar depth there (``view``: ``depth_m``, ``K``,
+    ``T_world_camera`` as in :class:`~hsqbench.sim.perceived.CameraView`)."""
+    depth = np.asarray(view.depth_m, dtype=np.float64)
+    K = np.asarray(view.K, dtype=np.float64)
+    T = np.asarray(view.T_world_camera, dtype=np.float64)
+    cam = (points - T[:3, 3]) @ T[:3, :3]
+    z = cam[:, 2]
+    seen = np.zeros(len(points), dtype=bool)
+    front = np.flatnonzero(z > 1e-9)
+    u = np.rint(K[0, 0] * cam[front, 0] / z[front] + K[0, 2]).astype(np.int64)
+    v = np.rint(K[1, 1] * cam[front, 1] / z[front] + K[1, 2]).astype(np.int64)
+    inside = (u >= 0) & (u < depth.shape[1]) & (v >= 0) & (v < depth.shape[0])
+    rows = front[inside]
+    d = depth[v[inside], u[inside]]
+    seen[rows] = (d > 0) & (np.abs(d - z[rows]) <= tolerance_m)
+    return seen
