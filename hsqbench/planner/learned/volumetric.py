@@ -38,7 +38,7 @@ from hsqbench.planner.base import CleanInput, PlannerBase
 from hsqbench.planner.cleaning import CleaningConfig
 from hsqbench.planner.grasp import Grasp
 from hsqbench.planner.hsq.config import resolve_config
-from hsqbench.planner.learned import detection, tsdf
+from hsqbench.planner.learned import detection, tsdf, viewpoint
 from hsqbench.planner.learned.volumetric_config import (
     VolumetricConfig,
     resolve_volumetric_config,
@@ -232,7 +232,10 @@ class VolumetricPlanner(PlannerBase):
             local_plane = np.concatenate([plane[:3] @ yaw, plane[3:]])
             origins, centres = cube_origins(local, local_plane, cfg)
             local_views = [yawed_view(v, yaw) for v in seen]
-            grids = [tsdf.integrate(local_views, o, grid.voxel_m, shape, trunc) for o in origins]
+            grids = [
+                tsdf.integrate(self._cube_views(local_views, o), o, grid.voxel_m, shape, trunc)
+                for o in origins
+            ]
             cubes.append((yaw, origins, centres, grids))
         inputs = np.stack([g.network_input() for *_, grids in cubes for g in grids])
         valid = np.stack([detection.valid_centres(x, cfg.detection) for x in inputs])
@@ -273,6 +276,17 @@ class VolumetricPlanner(PlannerBase):
             reason=reason,
             surface_points=surface,
         )
+
+    def _cube_views(self, views: list[Any], origin: Array) -> list[Any]:
+        """The images a cube's TSDF is integrated from: the cameras' own, or (``viewpoint:
+        training``) each re-projected into the training camera of this cube."""
+        if self.config.viewpoint == "camera":
+            return views
+        tv = self.config.training_view
+        target = origin + np.asarray(tv.target_m)
+        T = viewpoint.camera_on_sphere(target, tv.distance_m, tv.polar_deg, tv.azimuth_deg)
+        size = (tv.width_px, tv.height_px)
+        return [viewpoint.reproject(v, T, tv.intrinsics(), size, tv.splat_px) for v in views]
 
     def _predict(self, training: str, inputs: NDArray, valid: NDArray) -> tuple[Any, Any, Any]:
         net = self.nets[training]

@@ -95,6 +95,47 @@ class DetectionConfig:
 
 
 @dataclass(frozen=True)
+class TrainingViewConfig:
+    """The camera the published weights' TSDFs were rendered from, relative to the cube.
+
+    Attributes:
+        target_m: the point it looks at, in the cube's frame (from its lower corner).
+        distance_m: its distance from that point.
+        polar_deg: its angle from the vertical.
+        azimuth_deg: its azimuth about the vertical (-90: on the cube's -y side).
+        width_px, height_px, focal_px: its image size and focal length (principal point at the
+            image's centre).
+        splat_px: each re-projected point fills the pixels this far around its own.
+    """
+
+    target_m: tuple[float, float, float] = (0.15, 0.15, 0.1)
+    distance_m: float = 0.6
+    polar_deg: float = 60.0
+    azimuth_deg: float = -90.0
+    width_px: int = 640
+    height_px: int = 480
+    focal_px: float = 540.0
+    splat_px: int = 1
+
+    def __post_init__(self) -> None:
+        if not (self.distance_m > 0 and 0 < self.polar_deg < 90 and self.focal_px > 0):
+            raise ValueError(
+                "volumetric.training_view needs distance_m > 0, 0 < polar_deg < 90, focal_px > 0"
+            )
+        if min(self.width_px, self.height_px) < 1 or self.splat_px < 0:
+            raise ValueError("volumetric.training_view: image sizes >= 1 and splat_px >= 0")
+
+    def intrinsics(self) -> np.ndarray:
+        return np.array(
+            [
+                [self.focal_px, 0.0, 0.5 * self.width_px],
+                [0.0, self.focal_px, 0.5 * self.height_px],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+
+@dataclass(frozen=True)
 class VolumetricConfig:
     """The ``vgn`` and ``giga`` planners (:mod:`hsqbench.planner.learned.volumetric`).
 
@@ -110,6 +151,10 @@ class VolumetricConfig:
             TSDF fused from every image.
         merge: how the views' grasps become one list with ``per_view``: ``best``, all of them
             ranked by their own quality.
+        viewpoint: with ``per_view``, ``camera`` (each cube sees the camera's own image) or
+            ``training`` (the image re-projected into ``training_view``'s camera of each cube,
+            :mod:`.viewpoint`).
+        training_view: that camera (:class:`TrainingViewConfig`).
         max_cubes_per_axis: at most this many cubes along x and along y.
         pads_beyond_tcp_m: the harness's ``P_G`` (midpoint of the pads) lies this far beyond the
             networks' grasp position (their hand's TCP) along the approach.
@@ -126,6 +171,8 @@ class VolumetricConfig:
     )
     input: Literal["fused", "per_view"] = "per_view"
     merge: Literal["best"] = "best"
+    viewpoint: Literal["camera", "training"] = "camera"
+    training_view: TrainingViewConfig = field(default_factory=TrainingViewConfig)
     max_cubes_per_axis: int = 3
     pads_beyond_tcp_m: float = 0.041
     weights_url: str = (
@@ -152,6 +199,15 @@ class VolumetricConfig:
             raise ValueError("volumetric: max_cubes_per_axis >= 1 and torch_threads >= 0")
         if self.input not in ("fused", "per_view"):
             raise ValueError(f"volumetric.input must be fused or per_view, got {self.input!r}")
+        if self.viewpoint not in ("camera", "training"):
+            raise ValueError(
+                f"volumetric.viewpoint must be camera or training, got {self.viewpoint!r}"
+            )
+        if self.viewpoint == "training" and self.input != "per_view":
+            raise ValueError(
+                "volumetric.viewpoint: training re-projects one camera's image per cube; it "
+                "needs input: per_view"
+            )
         if self.merge != "best":
             raise ValueError(f"volumetric.merge must be best, got {self.merge!r}")
         if self.device not in ("auto", "cpu", "cuda"):
