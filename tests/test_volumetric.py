@@ -73,11 +73,12 @@ def test_same_observation_same_grasps_whatever_the_seed(planner):
 
 
 def test_a_wide_scene_is_tiled_and_every_box_gets_grasps(planner):
-    """Two boxes 0.40 m apart (more than one 0.30 m cube): each is covered by a cube."""
+    """Two boxes 0.40 m apart (more than one 0.30 m cube): each is covered by a cube, in each
+    camera's input (the two cameras' yawed frames both need two cubes across the boxes)."""
     left = (BOX[0] + [0, -0.2, 0], BOX[1] + [0, -0.2, 0])
     right = (BOX[0] + [0, 0.2, 0], BOX[1] + [0, 0.2, 0])
     result = planner.plan(box_cloud([left, right]), _context([left, right], scene="packed"))
-    assert result.remaining["cubes"] == 2
+    assert result.remaining["cubes"] == 2 * 2
     ys = np.array([g.position[1] for g in result.grasps])
     assert np.any(ys < -0.1) and np.any(ys > 0.1)  # grasps near each box
     positions = np.array([g.position for g in result.grasps])

@@ -101,3 +101,13 @@ def test_two_views_run_separately_and_merge_by_quality(per_view):
     assert len(merged) == len(both.grasps) and {len(r.grasps) for r in alone} != {0}
     for a, b in zip(merged, both.grasps, strict=True):
         assert np.allclose(a.position, b.position, atol=1e-5) and a.score == pytest.approx(b.score)
+
+
+def test_the_input_settings_are_checked():
+    from hsqbench.planner.learned.volumetric_config import VolumetricConfig
+
+    assert VolumetricConfig().input == "per_view"
+    with pytest.raises(ValueError, match="input must be fused or per_view"):
+        VolumetricConfig(input="both")
+    with pytest.raises(ValueError, match="needs input: per_view"):
+        VolumetricConfig(input="fused", viewpoint="training")

@@ -2,17 +2,27 @@
 
 Per observation (:meth:`VolumetricPlanner.stages`):
 
+0. **Inputs** (``input``). The published weights were trained on the TSDF of one depth image
+   taken from the cube's -y side (:func:`input_frames`). ``per_view`` (default): each camera is
+   one input, in a frame yawed about the vertical so that the camera lies on the -y side of the
+   cloud's footprint centre (:func:`view_yaw`; the networks know the table and gravity, not the
+   world's yaw), integrated from that camera's image alone; ``fused``: one input, the world
+   axes, every image.
 1. **Cubes.** The networks see one 0.30 m cube (40^3 voxels of 7.5 mm) with the table 5 cm above
-   its floor; the workspace is wider. Cubes, axis-aligned with the world, are tiled over the
-   footprint of the (cleaned) cloud so that the part of each cube where grasps are kept (inside
-   the detection's x/y bounds) covers it: one cube for an isolated object, up to
+   its floor; the workspace is wider. Cubes, axis-aligned with the input's frame, are tiled over
+   the footprint of the (cleaned) cloud so that the part of each cube where grasps are kept
+   (inside the detection's x/y bounds) covers it: one cube for an isolated object, up to
    ``max_cubes_per_axis`` per axis for a packed scene (:func:`cube_origins`).
-2. **TSDF.** Each cube's TSDF is fused from the harness's depth images, the same noisy images the
-   cloud of every other planner comes from (``PlanningContext.depth_views``; :mod:`.tsdf`).
-3. **Network.** All cubes in one batch: VGN's volumes, or GIGA's encoder and its decoders at the
-   voxels the detection reads (:mod:`.vgn_net`, :mod:`.giga_net`).
-4. **Detection** as the papers do it (:mod:`.detection`); a grasp in the overlap of two cubes is
-   kept only from the cube whose kept part is centred nearest to it, so no grasp comes twice.
+2. **TSDF.** Each cube's TSDF is integrated from the input's depth images, the same noisy images
+   the cloud of every other planner comes from (``PlanningContext.depth_views``; :mod:`.tsdf`),
+   or (``viewpoint: training``) from each re-projected into the training camera of the cube
+   (:mod:`.viewpoint`).
+3. **Network.** All cubes of all inputs in one batch: VGN's volumes, or GIGA's encoder and its
+   decoders at the voxels the detection reads (:mod:`.vgn_net`, :mod:`.giga_net`).
+4. **Detection** as the papers do it (:mod:`.detection`); a grasp in the overlap of two cubes of
+   one input is kept only from the cube whose kept part is centred nearest to it, so no grasp
+   comes twice from one input. The inputs' grasps, mapped back to the world, are merged
+   (``merge: best``: all of them, ranked by their own quality).
 
 Grasps: the network's position (voxel index times voxel size, the networks' convention) is its
 hand's TCP; ``P_G`` lies ``pads_beyond_tcp_m`` further along the approach (the config says why);
