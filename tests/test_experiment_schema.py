@@ -211,3 +211,31 @@ def test_the_oldest_pandas_allowed_types_and_reports_a_run_alike(run_dir) -> Non
     assert old["pandas"] == version != pd.__version__
     here = report_tables(run_dir)
     assert "tables.md" in here and old["tables"] == here
+
+
+#: The columns of attempts.csv in hsqbench's first version (git history of results.py).
+FIRST_ATTEMPT_COLUMNS = (
+    *("trial_key", "experiment", "planner", "base_seed", "trial_index", "seed", "objects"),
+    *("attempt_index", "n_attempts", "status", "outcome", "success", "target", "rank_executed"),
+    *("n_grasps", "score", *schema.FACTOR_NAMES, "factors", "width_m", "perception_s"),
+    *("planning_s", "execution_s", "detail", "trial_wall_s", "worker", "config_hash"),
+    *("code_version", "finished_at"),
+)
+
+
+def test_a_run_of_an_older_version_loads_with_the_same_dtypes(run_dir, tmp_path) -> None:
+    """Its missing columns are NaN (numbers) or empty (text), typed as the schema says."""
+    old = tmp_path / "old"
+    old.mkdir()
+    for f in run_dir.iterdir():
+        if f.is_file() and f.name != "attempts.csv":
+            (old / f.name).write_bytes(f.read_bytes())
+    with (run_dir / "attempts.csv").open() as src, (old / "attempts.csv").open("w") as dst:
+        writer = csv.DictWriter(dst, FIRST_ATTEMPT_COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(csv.DictReader(src))
+    data = load_run(old)
+    check_dtypes(data.attempts, schema.ATTEMPTS)
+    a = data.attempts
+    assert a["sim_time_s"].isna().all() and (a["grasp_pose"] == "").all()
+    assert a["width_m"].equals(load_run(run_dir).attempts["width_m"])
