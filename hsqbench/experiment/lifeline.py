@@ -25,7 +25,8 @@ import time
 PARENT_ENV = "HSQBENCH_POOL_PARENT"
 _POLL_S = 0.5
 _watched: set[int] = set()  # the pids this process watches (its threads do not survive a fork)
-os.register_at_fork(after_in_child=_watched.clear)
+if hasattr(os, "register_at_fork"):  # POSIX; elsewhere workers are spawned, not forked
+    os.register_at_fork(after_in_child=_watched.clear)
 
 
 def _alive(pid: int) -> bool:
