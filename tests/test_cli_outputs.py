@@ -60,6 +60,7 @@ CASES = [
     ("plan", ["cloud.npy", "--json", "folder"], "--json folder: is a folder"),
     ("scene", ["--png", "folder"], "--png folder: is a folder"),
     ("scene", ["--png", "shot.jpg"], "needs the .png extension, e.g. shot.png"),
+    ("trial", ["--object", "mug", "--rerun", "ep.txt"], "needs the .rrd extension, e.g. ep.rrd"),
     ("scene", ["--mjcf", "file"], "--mjcf file: is a file, not a folder"),
     ("replay", ["--run", "somewhere", "--csv", "folder"], "--csv folder: is a folder"),
     ("benchmark", ["--run", "./file"], "--run file: is a file, not a folder"),

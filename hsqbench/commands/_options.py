@@ -390,7 +390,8 @@ def add_output(
         f"--{fmt}",
         folder=folder,
         example=f"out.{extension}",
-        suffix=".png" if fmt == "png" else "",  # the image writer picks the format by it
+        # The image writer picks the format by it; Rerun's viewer opens .rrd files.
+        suffix={"png": ".png", "rerun": ".rrd"}.get(fmt, ""),
     )
 
 
