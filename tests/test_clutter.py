@@ -202,3 +202,22 @@ def test_the_second_step_sees_with_the_harness_cameras(compiled) -> None:
     assert env.config.perception == config.perception  # tof+calibration, not their dex noise
     assert load_trial_config("trial_clutter_arm_bin").clutter.arm_until == "release"
     env.close()
+
+
+def test_their_packed_generation_places_upright_boxes_apart_on_the_table(tmp_path) -> None:
+    from hsqbench.sim.clutter.scenes import generate_packed
+
+    boxes = [make_box(tmp_path, (0.04, 0.05, 0.06), 0.1, name=f"box{i}") for i in range(3)]
+    world = compile_world(
+        boxes, [0.8] * 3, ClutterConfig(), load_robot_config(), load_physics_config()
+    )
+    unplaced = generate_packed(world, np.random.default_rng(3))
+    assert unplaced == [] and sorted(world.in_play) == ["box0", "box1", "box2"]
+    for name in world.in_play:
+        pose = world.pose(name)
+        assert 0.06 <= pose[0] <= 0.24 and 0.06 <= pose[1] <= 0.24  # 0.08-0.22, then settled
+        assert pose[2] == pytest.approx(world.table_z, abs=0.003)  # base on the table
+        assert abs(pose[3]) ** 2 + pose[6] ** 2 == pytest.approx(1.0, abs=1e-3)  # yaw only
+        assert world.touching_objects(name) == []  # placed apart
+    half = world.model.geom_size[world.geom_ids["box0"][0]].max()
+    assert half == pytest.approx(0.8 * 0.03, abs=1e-4)  # the 6 cm side scaled 0.8
