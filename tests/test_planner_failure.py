@@ -73,8 +73,8 @@ class NegativeWidth(PlannerBase):
 class NanScore(PlannerBase):
     name = "nan-score"
 
-    def stages(self, clean, context):
-        return PlanResult(grasps=[Grasp(_centre(clean), DOWN, 0.04, np.nan)])  # LINE nan-score
+    def stages(self, clean, context):  # LINE nan-score
+        return PlanResult(grasps=[Grasp(_centre(clean), DOWN, 0.04, np.nan)])
 
 
 class Listed(PlannerBase):
@@ -115,7 +115,7 @@ BROKE = {
     "inf-pose": "built an invalid Grasp",
     "skewed": "grasp rotation must be a proper rotation",
     "negative-width": "grasp width must be a finite length >= 0 m",
-    "nan-score": "grasp score must be a number",
+    "nan-score": "stages at {where} returned grasps[0] with score NaN",
     "listed": "stages at {where} returned list, not a PlanResult",
     "dicts": "returned grasps[0] as dict, not a Grasp",
     "no-base": "plan at {where} returned NoneType, not a PlanResult",

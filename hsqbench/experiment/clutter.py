@@ -237,3 +237,28 @@ def render_clutter(data: RunData, table: pd.DataFrame, reference: str = "hsq") -
 
 def _ci(low: float, high: float) -> str:
     return "—" if not np.isfinite(low) else f"[{low:.1f}, {high:.1f}]"
+
+
+def rates_over_rounds(ok: pd.DataFrame, rounds: pd.DataFrame, confidence: float) -> dict:
+    """GSR and CR intervals over rounds (``gsr_ci_*``, ``cr_ci_*``, percent) from one
+    planner's attempts and finished rounds of one kind: the objects and grasps of a round share
+    a scene and a sequence, so the round is the independent unit (NaN under five rounds)."""
+    key = ["base_seed", "trial_index"]
+    if len(ok):
+        per = ok.groupby(key)["success"].agg(["sum", "count"])
+        gsr = rate_over_clusters(per["sum"].to_numpy(), per["count"].to_numpy(), confidence)
+    else:
+        gsr = (np.nan, np.nan)
+    cr = (
+        rate_over_clusters(
+            rounds["n_cleared"].to_numpy(), rounds["n_objects"].to_numpy(), confidence
+        )
+        if len(rounds)
+        else (np.nan, np.nan)
+    )
+    return {
+        "gsr_ci_low_percent": 100 * gsr[0],
+        "gsr_ci_high_percent": 100 * gsr[1],
+        "cr_ci_low_percent": 100 * cr[0],
+        "cr_ci_high_percent": 100 * cr[1],
+    }

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from hsqbench.experiment.clutter import rates_over_rounds
 from hsqbench.experiment.results import STATUS_ERROR, STATUS_OK
 from hsqbench.experiment.run_data import RunData
 from hsqbench.experiment.stats import Rate
@@ -47,7 +48,6 @@ def _rate(k: int, n: int, confidence: float) -> dict[str, float]:
 def table4(data: RunData) -> pd.DataFrame:
     """One row per planner that ran pile rounds, then GIGA's reported row; empty without piles."""
     from hsqbench.experiment.graspable import method_label
-    from hsqbench.experiment.report import rates_over_rounds
 
     attempts, rounds = data.attempts, data.rounds
     if attempts.empty or not (attempts["experiment"] == EXPERIMENT).any():

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from hsqbench.experiment.cluster import rate_over_clusters
+from hsqbench.experiment.clutter import rates_over_rounds
 from hsqbench.experiment.config import EXPERIMENTS
 from hsqbench.experiment.graspable import (
     cr_graspable,
@@ -169,31 +169,6 @@ def table1_per_object(data: RunData) -> pd.DataFrame:
                 }
             )
     return pd.DataFrame(rows)
-
-
-def rates_over_rounds(ok: pd.DataFrame, rounds: pd.DataFrame, confidence: float) -> dict:
-    """GSR and CR intervals over rounds (``gsr_ci_*``, ``cr_ci_*``, percent) from one
-    planner's attempts and finished rounds of one kind: the objects and grasps of a round share
-    a scene and a sequence, so the round is the independent unit (NaN under five rounds)."""
-    key = ["base_seed", "trial_index"]
-    if len(ok):
-        per = ok.groupby(key)["success"].agg(["sum", "count"])
-        gsr = rate_over_clusters(per["sum"].to_numpy(), per["count"].to_numpy(), confidence)
-    else:
-        gsr = (np.nan, np.nan)
-    cr = (
-        rate_over_clusters(
-            rounds["n_cleared"].to_numpy(), rounds["n_objects"].to_numpy(), confidence
-        )
-        if len(rounds)
-        else (np.nan, np.nan)
-    )
-    return {
-        "gsr_ci_low_percent": 100 * gsr[0],
-        "gsr_ci_high_percent": 100 * gsr[1],
-        "cr_ci_low_percent": 100 * cr[0],
-        "cr_ci_high_percent": 100 * cr[1],
-    }
 
 
 def table2(data: RunData) -> pd.DataFrame:

@@ -22,6 +22,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from hsqbench.planner.grasp import Grasp, InvalidGrasp
 
 #: Where the contract is written down; every message points there.
@@ -143,6 +145,13 @@ def check_result(planner: Any, result: Any, method: str) -> None:
         bad = next((i for i, g in enumerate(grasps) if not isinstance(g, Grasp)), None)
         if bad is not None:
             raise broke(f"returned grasps[{bad}] as {type(grasps[bad]).__name__}, not a Grasp")
+        # A Grasp may be unscored (NaN) inside a planner; what it returns is ranked by score.
+        bad = next((i for i, g in enumerate(grasps) if np.isnan(g.score)), None)
+        if bad is not None:
+            raise broke(
+                f"returned grasps[{bad}] with score NaN (grasp score must be a number: the "
+                "harness ranks grasps by score)"
+            )
     timings = result.timings
     if not isinstance(timings, Mapping) or not all(
         isinstance(v, numbers.Real) and not isinstance(v, bool) for v in timings.values()

@@ -71,8 +71,6 @@ class Grasp:
                 "a grasp is a position of 3 numbers, a 3x3 rotation, a width in metres and a "
                 f"score: {exc}"
             ) from None
-        if np.isnan(score):  # the harness orders grasps by score
-            raise InvalidGrasp("grasp score must be a number, got NaN")
         if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
             raise InvalidGrasp("grasp position and rotation must be finite")
         if np.max(np.abs(rotation.T @ rotation - np.eye(3))) > 1e-6 or (

@@ -13,6 +13,7 @@ from scipy.spatial.transform import Rotation
 from hsqbench.config import from_dict
 from hsqbench.errors import ConfigError
 from hsqbench.planner.api import PlanningContext, PlanResult
+from hsqbench.planner.grasp import Grasp
 from hsqbench.planner.gripper import GripperModel
 from hsqbench.planner.hsq.config import PlannerConfig
 from hsqbench.planner.hsq.planner import HSQPlanner, plan_grasps, redraw_seed
@@ -317,7 +318,8 @@ def test_no_grasp_redraws_stage_one_until_a_grasp_survives(
     def stage_two(cloud, hidden, config, gripper, context):
         found = len(seeds) - 1 == grasps_on_draw
         assert context.seed == seeds[-1]  # stage two plans with the draw's seed too
-        return PlanResult(grasps=["a grasp"] if found else [], reason="" if found else "none")
+        grasps = [Grasp(np.zeros(3), np.eye(3), 0.04, 1.0)] if found else []
+        return PlanResult(grasps=grasps, reason="" if found else "none")
 
     monkeypatch.setattr(planner, "_recover", recover)
     monkeypatch.setattr(hsq_planner, "plan_in_context", stage_two)
