@@ -89,7 +89,7 @@ class PlanningContext:
             giga planners pick their weights by it).
         depth_views: the depth images the cloud was made from, if known: objects with
             ``depth_m`` (H, W), ``K`` (3, 3) and ``T_world_camera`` (4, 4)
-            (:class:`~hsqbench.sim.perceived.CameraView`; the vgn and giga planners fuse them).
+            (:class:`~hsqbench.sim.perceived.CameraView`; the vgn and giga planners read them).
     """
 
     support_plane: tuple[float, float, float, float] | None = None
