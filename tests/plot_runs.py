@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from hsqbench.experiment.csv_fields import format_row, typed_frame
 from hsqbench.experiment.run_data import RunData
-from hsqbench.experiment.schema import ATTEMPTS, ROUNDS, format_row, typed_frame
+from hsqbench.experiment.schema import ATTEMPTS, ROUNDS
 
 OBJECTS = ("mug", "bowl")
 

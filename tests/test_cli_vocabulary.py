@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from hsqbench.cli import build_parser
-from hsqbench.commands._options import deprecated_aliases
+from hsqbench.commands._deprecated import deprecated_aliases
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 

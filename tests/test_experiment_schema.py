@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hsqbench.experiment import schema
+from hsqbench.experiment import csv_fields, schema, schema_doc
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig, PackedConfig
 from hsqbench.experiment.executor import SerialExecutor
 from hsqbench.experiment.run_data import load_run
@@ -102,28 +102,28 @@ def test_the_writer_formats_by_the_column_kind() -> None:
     rank = schema.column("attempts", "rank_executed")
     detail = schema.column("attempts", "detail")
     # NumPy scalars are written as the numbers they hold (repr(np.float64) is "np.float64(..)").
-    assert schema.format_field(width, np.float64(0.035)) == "0.035"
-    assert schema.format_field(width, np.float32(0.5)) == "0.5"
-    assert schema.format_field(width, float("nan")) == ""
-    assert schema.format_field(success, np.bool_(True)) == "1"
-    assert schema.format_field(success, False) == "0"
-    assert schema.format_field(rank, np.int64(3)) == "3"
-    assert schema.format_field(detail, "a\nb") == "a | b"
+    assert csv_fields.format_field(width, np.float64(0.035)) == "0.035"
+    assert csv_fields.format_field(width, np.float32(0.5)) == "0.5"
+    assert csv_fields.format_field(width, float("nan")) == ""
+    assert csv_fields.format_field(success, np.bool_(True)) == "1"
+    assert csv_fields.format_field(success, False) == "0"
+    assert csv_fields.format_field(rank, np.int64(3)) == "3"
+    assert csv_fields.format_field(detail, "a\nb") == "a | b"
     for col, bad in ((width, "0.03"), (rank, 2.5), (success, 2)):
         with pytest.raises(schema.SchemaError, match=col.name):
-            schema.format_field(col, bad)
+            csv_fields.format_field(col, bad)
     # Written and read back, a value is the value computed.
     identity = dict.fromkeys(("base_seed", "trial_index", "attempt_index", "n_attempts"), 0)
-    row = schema.format_row(schema.ATTEMPTS, {"width_m": 0.1 + 0.2, "seed": 7, **identity})
-    back = schema.typed_frame([row], "attempts")
+    row = csv_fields.format_row(schema.ATTEMPTS, {"width_m": 0.1 + 0.2, "seed": 7, **identity})
+    back = csv_fields.typed_frame([row], "attempts")
     assert back.at[0, "width_m"] == 0.1 + 0.2 and back.at[0, "seed"] == 7
 
 
 def test_the_doc_tables_are_the_schema() -> None:
-    text = schema.DOC.read_text()
-    assert schema.update_doc(text) == text, (
+    text = schema_doc.DOC.read_text()
+    assert schema_doc.update_doc(text) == text, (
         "docs/results-format.md's column tables differ from hsqbench/experiment/schema.py: run "
-        "`python -m hsqbench.experiment.schema`"
+        "`python -m hsqbench.experiment.schema_doc`"
     )
     first_cells = re.findall(r"^\| (`.*?) \|", text, flags=re.MULTILINE)
     documented = {n for cell in first_cells for n in re.findall(r"`(\w+)`", cell)}

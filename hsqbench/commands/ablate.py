@@ -12,6 +12,7 @@ import argparse
 import dataclasses
 from pathlib import Path
 
+from hsqbench.commands._deprecated import deprecated
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
     RUN_HELP,
@@ -23,7 +24,6 @@ from hsqbench.commands._options import (
     add_run,
     add_run_control,
     add_seeds,
-    deprecated,
     protocol_of,
 )
 

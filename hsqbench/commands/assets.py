@@ -8,7 +8,8 @@ import sys
 import time
 from pathlib import Path
 
-from hsqbench.commands._options import add_jobs, add_protocol, deprecated, register_output
+from hsqbench.commands._deprecated import deprecated
+from hsqbench.commands._options import add_jobs, add_protocol, register_output
 
 HELP = "list, build, download (YCB, CC BY 4.0) or import the objects of the library"
 

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from hsqbench.commands._deprecated import deprecated
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
     RUN_HELP,
@@ -18,7 +19,6 @@ from hsqbench.commands._options import (
     add_run,
     add_run_control,
     add_seeds,
-    deprecated,
     positive_int,
     protocol_of,
     register_output,

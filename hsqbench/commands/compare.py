@@ -14,7 +14,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from hsqbench.commands._options import RUN_HELP, add_planners, as_path, deprecated
+from hsqbench.commands._deprecated import deprecated
+from hsqbench.commands._options import RUN_HELP, add_planners, as_path
 
 HELP = "compare two runs of one protocol trial by trial: paired differences and changed attempts"
 
@@ -134,8 +135,34 @@ def _value(v: Any) -> str:
     return repr(v) if isinstance(v, str) else f"{v:g}" if isinstance(v, float) else str(v)
 
 
+def _pair_up(args: argparse.Namespace, a: Any, b: Any) -> None:
+    """Keep the chosen planners of both runs and, with ``--part``, only A's trials B ran.
+
+    Raises:
+        RunMismatch: the runs do not hold the same trials (or, with ``--part``, B's are not
+            A's).
+        ValueError: with ``--part``, B holds no trial.
+    """
+    from hsqbench.experiment.combine import check_part_of, check_same_trials
+
+    if args.planners is not None:
+        for data in (a, b):
+            data.attempts = data.attempts[data.attempts["planner"].isin(args.planners)]
+            data.rounds = data.rounds[data.rounds["planner"].isin(args.planners)]
+    whose = f"{args.run_a}'s"
+    if args.part:
+        check_part_of(a, b, args.run_b, whose)
+        ran = set(b.attempts["trial_key"]) | set(b.rounds["trial_key"])
+        if not ran:
+            raise ValueError(f"--part: {args.run_b} has no trials")
+        a.attempts = a.attempts[a.attempts["trial_key"].isin(ran)]
+        a.rounds = a.rounds[a.rounds["trial_key"].isin(ran)]
+    else:
+        check_same_trials(a, b, args.run_b, whose)
+
+
 def run(args: argparse.Namespace) -> int:
-    from hsqbench.experiment.combine import RunMismatch, check_part_of, check_same_trials
+    from hsqbench.experiment.combine import RunMismatch
     from hsqbench.experiment.report import load_run
     from hsqbench.experiment.run_compare import (
         MATCH,
@@ -156,20 +183,7 @@ def run(args: argparse.Namespace) -> int:
     unknown = [c for c in columns if c not in MATCH]
     if unknown:
         raise ValueError(f"--columns {','.join(unknown)}: not compared columns; use of {MATCH}")
-    if args.planners is not None:
-        for data in (a, b):
-            data.attempts = data.attempts[data.attempts["planner"].isin(args.planners)]
-            data.rounds = data.rounds[data.rounds["planner"].isin(args.planners)]
-    whose = f"{args.run_a}'s"
-    if args.part:
-        check_part_of(a, b, args.run_b, whose)
-        ran = set(b.attempts["trial_key"]) | set(b.rounds["trial_key"])
-        if not ran:
-            raise ValueError(f"--part: {args.run_b} has no trials")
-        a.attempts = a.attempts[a.attempts["trial_key"].isin(ran)]
-        a.rounds = a.rounds[a.rounds["trial_key"].isin(ran)]
-    else:
-        check_same_trials(a, b, args.run_b, whose)
+    _pair_up(args, a, b)
     merged = matched_attempts(a, b)
     diffs = changed_attempts(merged, columns)
     differences = run_differences(a, b, merged)

@@ -6,13 +6,13 @@ import argparse
 import json
 from pathlib import Path
 
+from hsqbench.commands._deprecated import deprecated
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
     add_output,
     add_planner,
     add_scene,
     add_seed,
-    deprecated,
 )
 
 HELP = "plan grasps on a point cloud (.ply, .pcd, .npy, .xyz) and print the best ones"

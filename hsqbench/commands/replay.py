@@ -7,13 +7,13 @@ import argparse
 from collections import Counter
 from pathlib import Path
 
+from hsqbench.commands._deprecated import deprecated
 from hsqbench.commands._options import (
     RUN_HELP,
     add_output,
     add_planner,
     add_run,
     add_set,
-    deprecated,
 )
 
 HELP = "replay a run's attempts (recorded grasps, or --replan) and compare with attempts.csv"

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hsqbench.commands._options import RUN_HELP, add_run, as_path, deprecated
+from hsqbench.commands._deprecated import deprecated
+from hsqbench.commands._options import RUN_HELP, add_run, as_path
 
 HELP = (
     "write tables.md, table CSVs and PNG plots of a benchmark run (or sweep.csv and the plots of "

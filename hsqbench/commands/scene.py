@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hsqbench.commands._options import SCENES, add_output, add_scene, add_seed, deprecated
+from hsqbench.commands._deprecated import deprecated
+from hsqbench.commands._options import SCENES, add_output, add_scene, add_seed
 from hsqbench.names import check_objects
 
 HELP = "build an isolated, packed or pile scene, print what it holds, render it to a PNG or export it as MJCF"

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from hsqbench.experiment.sweep_config import SweepConfig
 
+from hsqbench.commands._deprecated import deprecated
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
     RUN_HELP,
@@ -21,7 +22,6 @@ from hsqbench.commands._options import (
     add_run,
     add_run_control,
     add_seeds,
-    deprecated,
     positive_int,
 )
 
@@ -177,7 +177,7 @@ def _existing_sweep(root: Path, args: argparse.Namespace) -> None:
     only with ``--resume`` (its points' runs are named by their settings, so any sweep can be
     added to it), moved aside with ``--force``, and otherwise an error."""
     from hsqbench.cli import CommandError
-    from hsqbench.experiment.runner import move_aside
+    from hsqbench.experiment.resume import move_aside
 
     if args.retry_errors and not args.resume:
         raise CommandError("--retry-errors only applies with --resume")

@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from hsqbench.commands._deprecated import deprecated
 from hsqbench.commands._options import (
     PLANNER_SPEC_HELP,
     add_output,
@@ -13,7 +14,6 @@ from hsqbench.commands._options import (
     add_scene,
     add_seed,
     add_set,
-    deprecated,
 )
 from hsqbench.names import check_objects
 

@@ -9,7 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from hsqbench.commands._options import deprecated
+from hsqbench.commands._deprecated import deprecated
 
 HELP = "open a recorded episode (.rrd from --rerun) in the Rerun viewer"
 

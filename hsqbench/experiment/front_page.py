@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from hsqbench.experiment.generated import write_or_check
 from hsqbench.experiment.graspable import method_label
 from hsqbench.experiment.markdown import md_table, p_text, signed_pp
 from hsqbench.experiment.object_table import OBJECTS_CSV
@@ -279,15 +280,8 @@ def main(argv: list[str] | None = None) -> int:
     except FrontPageError as exc:
         print(f"front page: {exc}", file=sys.stderr)
         return 2
-    if args.check:
-        if new != text:
-            print(f"{args.readme}: tables differ from {args.results}; run "
-                  "`python -m hsqbench.experiment.front_page`", file=sys.stderr)  # fmt: skip
-            return 1
-        return 0
-    args.readme.write_text(new)
-    print(f"{args.readme}: tables written from {args.results}")
-    return 0
+    module = "hsqbench.experiment.front_page"
+    return write_or_check(args.readme, text, new, args.check, "tables", args.results, module)
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from hsqbench.experiment import schema
 from hsqbench.experiment.backend import TrialRun
 from hsqbench.experiment.config import ROUND_EXPERIMENTS
+from hsqbench.experiment.csv_fields import format_row
 from hsqbench.sim.outcome import Attempt, RoundResult
 from hsqbench.sim.recorded_pose import pose7_in_frame
 
@@ -214,7 +215,7 @@ def rows_for(
         "scene_settle_s": getattr(run.result, "scene_settle_s", None),
         "scene_max_speed": getattr(run.result, "scene_max_speed", None),
     }
-    attempt_rows = [schema.format_row(schema.ATTEMPTS, r) for r in _attempt_records(run, common)]
+    attempt_rows = [format_row(schema.ATTEMPTS, r) for r in _attempt_records(run, common)]
     if spec.experiment not in ROUND_EXPERIMENTS:
         return attempt_rows, None
     result = run.result
@@ -248,7 +249,7 @@ def rows_for(
             "status": STATUS_ERROR,
             "detail": "; ".join(filter(None, (run.error or "unknown error", spec.draw_note))),
         }
-    return attempt_rows, schema.format_row(schema.ROUNDS, round_row)
+    return attempt_rows, format_row(schema.ROUNDS, round_row)
 
 
 def _unplaced_note(names: list[str]) -> str:

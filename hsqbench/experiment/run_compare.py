@@ -103,10 +103,24 @@ def run_differences(a: RunData, b: RunData, merged: pd.DataFrame) -> pd.DataFram
     key, the same draw; bootstrap interval and exact sign-flip test over rounds, since the
     objects of a round are not independent). p Holm-adjusted over all of them, and the verdicts
     follow the adjusted p."""
+    rows = _isolated_rows(merged, a.confidence)
+    for kind in ("packed", "pile"):
+        rows += _round_rows(a, b, kind)
+    table = pd.DataFrame(rows)
+    if table.empty:
+        return table
+    table["p_holm"], table["verdict"] = holm_verdicts(
+        table["difference_pp"].to_numpy(), table["p_value"].to_numpy(), a.confidence
+    )
+    return table
+
+
+def _isolated_rows(merged: pd.DataFrame, confidence: float) -> list[dict[str, Any]]:
+    """One row per planner: isolated GSR, B - A over the paired attempts."""
     rows = []
     iso = isolated_pairs(merged)
     for planner, sub in iso.groupby("planner", sort=False):
-        d = PairedDifference.of(sub["b"], sub["a"], a.confidence)  # B is "the planner"
+        d = PairedDifference.of(sub["b"], sub["a"], confidence)  # B is "the planner"
         rows.append(
             {
                 **_row(
@@ -125,46 +139,46 @@ def run_differences(a: RunData, b: RunData, merged: pd.DataFrame) -> pd.DataFram
                 "p_value": d.p_value,
             }
         )
-    for kind in ("packed", "pile"):
-        ra, rb = finished_rounds(a.rounds, kind), finished_rounds(b.rounds, kind)
-        if ra.empty or rb.empty:
+    return rows
+
+
+def _round_rows(a: RunData, b: RunData, kind: str) -> list[dict[str, Any]]:
+    """One row per planner with paired rounds: ``kind`` (packed, pile) CR, B - A over the
+    rounds both runs finished."""
+    ra, rb = finished_rounds(a.rounds, kind), finished_rounds(b.rounds, kind)
+    if ra.empty or rb.empty:
+        return []
+    rows = []
+    for planner in dict.fromkeys(ra["planner"]):
+        pairs = object_pairs(  # its "planner" column is run A's, "reference" run B's
+            ra[ra["planner"] == planner].set_index("trial_key"),
+            rb[rb["planner"] == planner].set_index("trial_key"),
+        )
+        if not len(pairs):
             continue
-        for planner in dict.fromkeys(ra["planner"]):
-            pairs = object_pairs(  # its "planner" column is run A's, "reference" run B's
-                ra[ra["planner"] == planner].set_index("trial_key"),
-                rb[rb["planner"] == planner].set_index("trial_key"),
-            )
-            if not len(pairs):
-                continue
-            ab = pairs.rename(columns={"planner": "reference", "reference": "planner"})
-            c = clustered(ab, "round", a.confidence)
-            won = int((ab["planner"] & ~ab["reference"]).sum())
-            lost = int((~ab["planner"] & ab["reference"]).sum())
-            rows.append(
-                {
-                    **_row(
-                        f"{kind} CR",
-                        str(planner),
-                        100 * ab["reference"].mean(),
-                        100 * ab["planner"].mean(),
-                        lost,
-                        won,
-                        len(ab),
-                    ),
-                    "over": f"{c.clusters} rounds",
-                    "difference_pp": 100 * c.difference,
-                    "ci_low_pp": 100 * c.low,
-                    "ci_high_pp": 100 * c.high,
-                    "p_value": c.p_value,
-                }
-            )
-    table = pd.DataFrame(rows)
-    if table.empty:
-        return table
-    table["p_holm"], table["verdict"] = holm_verdicts(
-        table["difference_pp"].to_numpy(), table["p_value"].to_numpy(), a.confidence
-    )
-    return table
+        ab = pairs.rename(columns={"planner": "reference", "reference": "planner"})
+        c = clustered(ab, "round", a.confidence)
+        won = int((ab["planner"] & ~ab["reference"]).sum())
+        lost = int((~ab["planner"] & ab["reference"]).sum())
+        rows.append(
+            {
+                **_row(
+                    f"{kind} CR",
+                    str(planner),
+                    100 * ab["reference"].mean(),
+                    100 * ab["planner"].mean(),
+                    lost,
+                    won,
+                    len(ab),
+                ),
+                "over": f"{c.clusters} rounds",
+                "difference_pp": 100 * c.difference,
+                "ci_low_pp": 100 * c.low,
+                "ci_high_pp": 100 * c.high,
+                "p_value": c.p_value,
+            }
+        )
+    return rows
 
 
 def object_transitions(merged: pd.DataFrame) -> pd.DataFrame:

@@ -11,6 +11,7 @@ from typing import Any
 
 import pandas as pd
 
+from hsqbench.experiment.csv_fields import typed_frame
 from hsqbench.experiment.results import (
     ATTEMPTS_FILE,
     ROUNDS_FILE,
@@ -19,7 +20,6 @@ from hsqbench.experiment.results import (
     load_results,
 )
 from hsqbench.experiment.rows import has_attempts
-from hsqbench.experiment.schema import typed_frame
 from hsqbench.experiment.settling import unsettled_note
 
 MEASURED = "measured, simulation (this run)"  # the label of rows from the MuJoCo backend

@@ -1,15 +1,15 @@
 """Run a protocol: build the trial list, skip what a run folder already holds, run the rest.
 
 The runner owns the run folder (``runs/<run>/``): it checks that a resumed run has the same
-config hash, repairs the files after a kill (see :mod:`hsqbench.experiment.results`), records
-each trial as it finishes, and shows its progress with the running GSR per planner (a bar on a
-terminal, periodic plain lines in a log: :mod:`hsqbench.experiment.progress`).
+config hash (:mod:`hsqbench.experiment.resume`), repairs the files after a kill (see
+:mod:`hsqbench.experiment.results`), records each trial as it finishes, and shows its progress
+with the running GSR per planner (a bar on a terminal, periodic plain lines in a log:
+:mod:`hsqbench.experiment.progress`).
 """
 
 from __future__ import annotations
 
 import itertools
-import json
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
@@ -23,13 +23,8 @@ from hsqbench.experiment.config import ExperimentConfig
 from hsqbench.experiment.executor import Executor, SerialExecutor
 from hsqbench.experiment.machine import machine_info
 from hsqbench.experiment.progress import RunProgress, Tally
-from hsqbench.experiment.results import (
-    ATTEMPTS_FILE,
-    RUN_FILE,
-    ResultsError,
-    ResultStore,
-)
-from hsqbench.experiment.rows import attempts_paths, packed_files
+from hsqbench.experiment.results import RUN_FILE, ResultStore
+from hsqbench.experiment.resume import check_resumable, existing_run
 from hsqbench.experiment.seeds import TrialSpec, build_trials
 from hsqbench.outputs import check_output
 from hsqbench.planner.registry import planner_sources
@@ -68,14 +63,6 @@ PLANNER_ERROR = str(Outcome.PLANNER_ERROR)
 
 def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
-
-
-def move_aside(run_dir: Path) -> Path:
-    """Rename ``run_dir`` to ``<name>.replaced-<UTC time>`` (``--force``); the new path."""
-    stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-    target = run_dir.with_name(f"{run_dir.name}.replaced-{stamp}")
-    run_dir.rename(target)
-    return target
 
 
 def protocol_objects(
@@ -156,7 +143,7 @@ def run_benchmark(
     backend = backend if backend is not None else SimBackend(config.trial_config)
     executor = executor if executor is not None else SerialExecutor()
     store = ResultStore(run_dir)
-    meta = _existing_run(store, run_dir, resume, force)
+    meta = existing_run(store, run_dir, resume, force)
     # A subset of the config's seeds (--until-halfwidth adds them); the hash keeps them all.
     chosen = config if base_seeds is None else _only_seeds(config, base_seeds)
     specs, unusable = _select(chosen, backend, executor, planners, experiments, progress)
@@ -166,7 +153,7 @@ def run_benchmark(
     chash = config_hash(RunIdentity(config, fingerprint))
     specs = list(specs)
     draws = {key: packed_draws(specs, kind) for kind, key in DRAW_KEYS.items()}
-    _check_resumable(
+    check_resumable(
         run_dir, meta, draws, chash, {"config": to_dict(config), "backend": fingerprint}
     )
 
@@ -306,89 +293,6 @@ def _new_session(
         "unusable_objects": dict(unusable),
         "status": "running",
     }
-
-
-def _existing_run(
-    store: ResultStore, run_dir: Path, resume: bool, force: bool
-) -> dict[str, Any] | None:
-    """The ``run.json`` of the run in ``run_dir`` to continue (None: a new run), after the
-    folder checks: ``force`` moves an old run aside; without ``resume`` an existing run is an
-    error."""
-    meta = store.read_meta()
-    plain, packed = attempts_paths(run_dir)
-    if resume and packed_files(packed):
-        raise ResultsError(
-            f"{run_dir}: its {ATTEMPTS_FILE} is gzipped (a canonical run): `make results` "
-            "unpacks and resumes it, or gunzip it to resume it here"
-        )
-    has_data = meta is not None or plain.exists()
-    if has_data and force:
-        moved = move_aside(run_dir)
-        print(f"moved the previous run to {moved}", file=sys.stderr)
-        return None
-    if has_data and not resume:
-        raise ResultsError(
-            f"{run_dir} already holds a run: pass --resume to continue it, choose another "
-            "--run name, or --force to move it aside and start again"
-        )
-    if has_data and meta is None:
-        raise ResultsError(f"{run_dir} has results but no {RUN_FILE}: choose another --run name")
-    return meta
-
-
-def _check_resumable(
-    run_dir: Path,
-    meta: dict[str, Any] | None,
-    draws: dict[str, dict[str, dict]],
-    chash: str,
-    identity: dict[str, Any],
-) -> None:
-    """A resumed run must draw the same packed and pile rounds and have the same config
-    hash. ``draws``: ``run.json`` key (``packed_draws``, ``pile_draws``) -> the rounds' draws;
-    ``identity``: this config and backend settings, as ``run.json`` records them, to name what
-    differs."""
-    if meta is None:
-        return
-    changed = []
-    for key, rounds in draws.items():
-        recorded = meta.get(key, {})
-        kind = "" if key == "packed_draws" else "pile "
-        changed += sorted(f"{kind}{k}" for k, v in rounds.items() if recorded.get(k, v) != v)
-    if changed:
-        raise ResultsError(
-            f"{run_dir}: the packed rounds {changed} now draw other objects than when the run "
-            f"was started (recorded in {RUN_FILE}); the objects' footprints or the scene's "
-            "placement changed. Choose a new --run name, or --force to move the old run aside"
-        )
-    if meta.get("config_hash") != chash:
-        recorded = {"config": meta.get("config"), "backend": meta.get("backend")}
-        found = differences(recorded, json.loads(json.dumps(identity)))
-        shown = "; ".join(found[:4]) + (f"; and {len(found) - 4} more" if len(found) > 4 else "")
-        raise ResultsError(
-            f"{run_dir} was run with config hash {meta.get('config_hash')}, but this config "
-            f"(with its trial settings) hashes to {chash}"
-            + (f" ({shown})" if shown else "")
-            + ": results of two configs must not mix. Choose a new --run name, or --force to "
-            "move the old run aside"
-        )
-
-
-def differences(old: Any, new: Any, path: str = "") -> list[str]:
-    """``path: old -> new`` for every leaf where two JSON trees (``run.json``'s config and
-    backend settings) differ, in key order."""
-    if isinstance(old, dict) and isinstance(new, dict):
-        out = []
-        for key in sorted(set(old) | set(new), key=str):
-            out += differences(old.get(key), new.get(key), f"{path}.{key}" if path else str(key))
-        return out
-    if old == new:
-        return []
-
-    def short(value: Any) -> str:
-        text = json.dumps(value)
-        return text if len(text) <= 60 else text[:57] + "..."
-
-    return [f"{path}: {short(old)} -> {short(new)}"]
 
 
 def _run_pending(

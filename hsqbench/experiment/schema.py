@@ -1,10 +1,9 @@
 """The columns of a run's results files, once: name, kind, units and meaning of every column of
 ``attempts.csv`` and ``rounds.csv``.
 
-The writer formats each field by its column's kind (:func:`format_field`), :func:`typed_frame`
-gives every reader (``load_run``, the report, a user's notebook) the same dtypes whatever the
-pandas version, and docs/results-format.md's column tables are rendered from here
-(``python -m hsqbench.experiment.schema`` rewrites them, ``--check`` says whether they drifted).
+The writer formats each field by its column's kind and every reader types each column by it
+(:mod:`hsqbench.experiment.csv_fields`), and docs/results-format.md's column tables are rendered
+from here (:mod:`hsqbench.experiment.schema_doc`).
 
 Dtypes are NumPy's, with NaN for an empty field, as ``pd.read_csv`` reads the files: a number
 column that may be empty (an error row, an older run) is ``float64`` even when its values are
@@ -15,17 +14,7 @@ text, ``""`` where empty (``str`` under pandas 3, ``object`` before).
 
 from __future__ import annotations
 
-import argparse
-import math
-import re
-import sys
-from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
-
-import numpy as np
-import pandas as pd
 
 from hsqbench.sim.outcome import Outcome
 
@@ -344,174 +333,6 @@ ROUND_COLUMNS: tuple[str, ...] = tuple(c.name for c in ROUNDS)
 _BY_NAME = {"attempts": {c.name: c for c in ATTEMPTS}, "rounds": {c.name: c for c in ROUNDS}}
 
 
-# -- writing ---------------------------------------------------------------------------------
-def _is_missing(value: Any) -> bool:
-    return value is None or (isinstance(value, float | np.floating) and math.isnan(value))
-
-
-def format_field(column: Column, value: Any) -> str:
-    """``value`` as ``column``'s CSV field, on one line: numbers exact (``repr`` of the float),
-    booleans ``1``/``0``, None and NaN empty. NumPy scalars are written as the Python numbers
-    they hold (never ``np.float64(...)``).
-
-    Raises:
-        SchemaError: a value the column's kind cannot hold (text in a number column, a
-            fraction in an integer column).
-    """
-    if _is_missing(value):
-        return ""
-    kind = column.kind
-    if kind == "text":
-        text = str(value)
-        return (
-            text.replace("\r", " ").replace("\n", " | ") if ("\n" in text or "\r" in text) else text
-        )
-    if isinstance(value, str):
-        raise SchemaError(f"column {column.name} ({kind}) cannot hold the text {value!r}")
-    if kind == "bool":
-        if value not in (0, 1):
-            raise SchemaError(f"column {column.name} (bool) cannot hold {value!r}")
-        return "1" if value else "0"
-    if isinstance(value, bool | np.bool_):
-        return "1" if value else "0"
-    if kind in ("int", "count") or isinstance(value, int | np.integer):
-        whole = int(value)
-        if whole != value:
-            raise SchemaError(f"column {column.name} ({kind}) cannot hold the fraction {value!r}")
-        return str(whole)
-    return repr(float(value))
-
-
-def format_row(columns: Sequence[Column], record: Mapping[str, Any]) -> dict[str, str]:
-    """One CSV row of ``record`` (columns it lacks are empty)."""
-    return {c.name: format_field(c, record.get(c.name)) for c in columns}
-
-
-# -- reading ---------------------------------------------------------------------------------
-def _parse(column: Column, fields: list[str], where: str) -> Any:
-    if column.kind == "text":
-        return pd.Series(fields, dtype=str)
-    number = float if column.kind != "int" else int
-    out = []
-    for i, text in enumerate(fields):
-        if text == "":
-            if column.kind == "int":
-                raise SchemaError(
-                    f"{where}: row {i + 1} has no {column.name} (an integer every row holds); "
-                    "the file was edited or damaged"
-                )
-            out.append(math.nan)
-            continue
-        try:
-            out.append(number(text))
-        except ValueError:
-            raise SchemaError(
-                f"{where}: row {i + 1}: {column.name} is {text!r}, not a {column.kind} "
-                f"({column.values}); the file was edited or damaged"
-            ) from None
-    return np.array(out, dtype=column.dtype)
-
-
-def typed_frame(
-    rows: Iterable[Mapping[str, str]], table: str = "attempts", where: str = ""
-) -> pd.DataFrame:
-    """The rows of ``attempts.csv`` or ``rounds.csv`` (``table``), as read (every field text,
-    a column a row lacks empty) as a frame of the schema's columns, in order, with their dtypes.
-
-    Raises:
-        SchemaError: a field its column's kind cannot hold (``where`` names the file).
-    """
-    columns = ATTEMPTS if table == "attempts" else ROUNDS
-    rows = list(rows)
-    where = where or f"{table}.csv"
-    data = {c.name: _parse(c, [str(r.get(c.name, "")) for r in rows], where) for c in columns}
-    return pd.DataFrame(data, index=pd.RangeIndex(len(rows)))
-
-
 def column(table: str, name: str) -> Column:
     """The column ``name`` of ``table`` (``attempts`` or ``rounds``)."""
     return _BY_NAME[table][name]
-
-
-# -- the doc's tables --------------------------------------------------------------------------
-DOC = Path(__file__).resolve().parents[2] / "docs" / "results-format.md"
-BLOCK = re.compile(r"(<!-- columns: (?P<table>\w+) -->\n)(.*?)(<!-- /columns -->)", re.DOTALL)
-
-
-def _cell(text: str) -> str:
-    return text.replace("|", "\\|")
-
-
-def _dtype_cell(c: Column) -> str:
-    return f"`{c.dtype}`" + (" (`object` before pandas 3)" if c.kind == "text" else "")
-
-
-def render_table(table: str) -> str:
-    """The markdown table of ``table``'s columns; in ``rounds``, the columns that are the same
-    as in ``attempts.csv`` say so. Consecutive columns alike but for the name share a row."""
-    columns = ATTEMPTS if table == "attempts" else ROUNDS
-    shared = {id(c) for c in ATTEMPTS} if table == "rounds" else set()
-    groups: list[list[Column]] = []
-    for c in columns:
-        prev = groups[-1][-1] if groups else None
-
-        def same(a: Column, b: Column) -> bool:
-            if id(a) in shared or id(b) in shared:
-                return id(a) in shared and id(b) in shared
-            return (a.kind, a.values, a.meaning) == (b.kind, b.values, b.meaning)
-
-        if prev is not None and same(prev, c):
-            groups[-1].append(c)
-        else:
-            groups.append([c])
-    lines = [
-        "| column | meaning | units / values | pandas dtype (`load_run`) |",
-        "| --- | --- | --- | --- |",
-    ]
-    for g in groups:
-        names = ", ".join(f"`{c.name}`" for c in g)
-        c = g[0]
-        if id(c) in shared:
-            lines.append(f"| {names} | as in `attempts.csv` | | |")
-        else:
-            lines.append(f"| {names} | {_cell(c.meaning)} | {_cell(c.values)} | {_dtype_cell(c)} |")
-    return "\n".join(lines) + "\n"
-
-
-def update_doc(text: str) -> str:
-    """``text`` (docs/results-format.md) with its column tables rendered from the schema."""
-    found = {m["table"] for m in BLOCK.finditer(text)}
-    if found != {"attempts", "rounds"}:
-        raise SchemaError(
-            f"{DOC.name} needs one <!-- columns: attempts --> and one <!-- columns: rounds --> "
-            f"block, each closed by <!-- /columns -->; found {sorted(found)}"
-        )
-    return BLOCK.sub(lambda m: m[1] + render_table(m["table"]) + m[4], text)
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m hsqbench.experiment.schema",
-        description="Rewrite the column tables of docs/results-format.md from the schema.",
-    )
-    parser.add_argument("--doc", type=Path, default=DOC)
-    parser.add_argument("--check", action="store_true", help="exit 1 if the doc's tables differ")
-    args = parser.parse_args(argv)
-    text = args.doc.read_text()
-    new = update_doc(text)
-    if args.check:
-        if new != text:
-            print(
-                f"{args.doc}: column tables differ from hsqbench/experiment/schema.py; run "
-                "`python -m hsqbench.experiment.schema`",
-                file=sys.stderr,
-            )
-            return 1
-        return 0
-    args.doc.write_text(new)
-    print(f"{args.doc}: column tables written")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
