@@ -38,14 +38,9 @@ from hsqbench.config import load_config
 from hsqbench.planner.api import PlanningContext, PlanResult
 from hsqbench.planner.gripper import GripperModel, resolve_gripper
 from hsqbench.planner.hsq.config import GraspConfig, resolve_config
-from hsqbench.planner.hsq.stage_two.candidates import CandidateSet, ClosingLines
-from hsqbench.planner.hsq.stage_two.elimination import (
-    approach_openings,
-    body_hits,
-    line_boxes,
-    table_clear,
-)
-from hsqbench.planner.truth import ObjectTruth, SceneTruth
+from hsqbench.planner.hsq.stage_two.candidates import CandidateSet, ClosingLines, roll_frames
+from hsqbench.planner.hsq.stage_two.elimination import approach_openings, body_hits, line_boxes
+from hsqbench.planner.truth import HandTruth, ObjectTruth, SceneTruth
 
 #: A facet point this close to another hull of the same object is on a joint between hulls (CoACD
 #: hulls touch along their cut planes), metres.
@@ -58,8 +53,11 @@ class OracleConfig:
 
     contact_samples: int = 500
     obstacle_spacing_m: float = 0.006
-    friction_coefficient: float = 0.5
+    friction_coefficient: float | None = None
     min_width_m: float = 0.005
+    table_clearance_m: float = 0.002
+    contact_shifts: int = 4
+    pad_edge_margin_m: float = 0.002
     max_pairs_per_object: int = 3000
     max_lines_per_object: int = 150
     batch_lines: int = 25
@@ -75,8 +73,12 @@ class OracleConfig:
             )
         if not 0 < self.roll_step_deg <= 180 or self.obstacle_spacing_m <= 0:
             raise ValueError("oracle: roll_step_deg in (0, 180], obstacle_spacing_m > 0")
-        if self.friction_coefficient <= 0:
-            raise ValueError("oracle: friction_coefficient must be positive")
+        if self.friction_coefficient is not None and self.friction_coefficient <= 0:
+            raise ValueError("oracle: friction_coefficient must be positive or null")
+        if self.contact_shifts < 1 or self.table_clearance_m < 0 or self.pad_edge_margin_m < 0:
+            raise ValueError(
+                "oracle: contact_shifts >= 1, table_clearance_m and pad_edge_margin_m >= 0"
+            )
 
 
 def load_oracle_config(path: str | Path | None = "oracle") -> OracleConfig:
@@ -112,17 +114,18 @@ def sample_surface(
 def antipodal_lines(
     obj: ObjectTruth,
     max_width_m: float,
+    friction: float,
     config: OracleConfig,
     rng: np.random.Generator,
 ) -> tuple[ClosingLines, NDArray[np.float64]]:
-    """Closing lines between antipodal contact pairs of one object (at most
-    ``max_pairs_per_object``), and each line's cone quality (the smaller cosine between the line
+    """Closing lines between antipodal contact pairs of one object within the friction cone of
+    ``friction`` (at most ``max_pairs_per_object``), and each line's cone quality (the smaller cosine between the line
     and the two inward normals)."""
     pts, nrm = sample_surface(obj, config.contact_samples, rng)
     v = pts[None, :, :] - pts[:, None, :]  # (i, j): from contact i to contact j
     w = np.linalg.norm(v, axis=2)
     d = v / np.maximum(w, 1e-12)[..., None]
-    cos_cone = np.cos(np.arctan(config.friction_coefficient))
+    cos_cone = np.cos(np.arctan(friction))
     at_i = -np.einsum("ik,ijk->ij", nrm, d)  # the closing direction against i's inward normal
     at_j = np.einsum("jk,ijk->ij", nrm, d)  # ... and along j's outward normal
     ok = (at_i >= cos_cone) & (at_j >= cos_cone) & (w >= config.min_width_m) & (w <= max_width_m)
@@ -166,6 +169,60 @@ def _surface_points(obj: ObjectTruth, config: OracleConfig, rng: np.random.Gener
     return sample_surface(obj, n, rng)[0]
 
 
+def _table_ok(
+    lines: ClosingLines,
+    rolls: NDArray,
+    hand: HandTruth,
+    plane: NDArray,
+    shifts: NDArray,
+    approach_m: float,
+    clearance_m: float,
+) -> NDArray[np.bool_]:
+    """(L, R, S): whether the hand's true collision hulls stay ``clearance_m`` above the table
+    at each line, roll and shift, at the grasp and at the pre-grasp ``approach_m`` back along
+    the approach (between the two the distance is linear, so those two bound the motion).
+
+    A shift ``s`` moves the hand back along its approach by ``s``: the contacts then sit ``s``
+    toward the fingertips on the pads, which lets the hand grasp low on a flat object."""
+    frames = roll_frames(lines.directions, lines.approach0, rolls)  # (L, R, 3, 3)
+    u = np.einsum("j,lrjk->lrk", plane[:3], frames)  # the table normal in each grasp frame
+    half = 0.5 * lines.openings[:, None]
+    low = np.minimum.reduce(
+        [
+            (u @ hand.left_finger.T).min(axis=2) + u[..., 0] * half,
+            (u @ hand.right_finger.T).min(axis=2) - u[..., 0] * half,
+            (u @ hand.palm.T).min(axis=2),
+        ]
+    )
+    base = lines.centres @ plane[:3] + plane[3]
+    dist = base[:, None] + low + np.minimum(0.0, -approach_m * u[..., 2])
+    return dist[..., None] - shifts * u[..., 2, None] >= clearance_m
+
+
+def _poses(
+    lines: ClosingLines, rolls: NDArray, feasible: NDArray[np.bool_], shifts: NDArray
+) -> tuple[ClosingLines, NDArray[np.bool_]]:
+    """Every (line, roll) as a line with a single roll (zero), its centre the TCP: the contacts'
+    midpoint moved back along the approach by the first feasible shift (none: no shift).
+    Returns those lines, (L * R,), and whether each pose is feasible."""
+    frames = roll_frames(lines.directions, lines.approach0, rolls)
+    approach = frames[..., 2].reshape(-1, 3)
+    ok = feasible.any(axis=2).ravel()
+    shift = shifts[np.argmax(feasible, axis=2)].ravel() * ok
+    rep = np.repeat(np.arange(len(lines)), rolls.size)
+    out = ClosingLines(
+        centres=lines.centres[rep] - shift[:, None] * approach,
+        directions=lines.directions[rep],
+        approach0=approach,
+        half_lengths=lines.half_lengths[rep],
+        source=lines.source[rep],
+        axis=lines.axis[rep],
+        family=lines.family[rep],
+        openings=lines.openings[rep],
+    )
+    return out, ok
+
+
 def _subset(lines: ClosingLines, keep: NDArray[np.int64]) -> ClosingLines:
     return ClosingLines(
         lines.centres[keep],
@@ -183,32 +240,40 @@ def _object_search(
     lines: ClosingLines,
     rolls: NDArray,
     obstacles: NDArray,
+    hand: HandTruth,
     gripper: GripperModel,
     grasp_cfg: GraspConfig,
     plane: NDArray,
+    shifts: NDArray,
     config: OracleConfig,
     rng: np.random.Generator,
     first_only: bool,
 ) -> tuple[ClosingLines, NDArray[np.bool_], NDArray[np.int64]]:
-    """One object's lines that clear the table at some roll (at most ``max_lines_per_object``,
-    drawn at random), and which of their rolls also touch nothing; with ``first_only`` the search
-    stops at the first batch holding a feasible pose. Returns the lines, (L, R) feasibility and
-    the kept lines' indices in ``lines``."""
+    """One object's lines that clear the table at some roll and shift (at most
+    ``max_lines_per_object``, drawn at random), and which of their (roll, shift) poses also
+    touch nothing; with ``first_only`` the search stops at the first batch holding a feasible
+    pose. Returns the lines, (L, R, S) feasibility and the kept lines' indices in ``lines``."""
     lines.openings = approach_openings(lines.half_lengths, gripper, grasp_cfg)
+    clear = _table_ok(
+        lines, rolls, hand, plane, shifts, grasp_cfg.approach_distance_m, config.table_clearance_m
+    )
+    alive = rng.permutation(np.flatnonzero(clear.any(axis=(1, 2))))
+    alive = alive[: config.max_lines_per_object]
     cands = CandidateSet(lines, rolls)
-    idx = np.arange(len(lines))
     swept = line_boxes(gripper, lines.openings, grasp_cfg.approach_distance_m)
-    clear = table_clear(cands, idx, swept, plane, grasp_cfg.table_clearance_m)
-    alive = rng.permutation(np.flatnonzero(np.any(clear, axis=1)))[: config.max_lines_per_object]
-    ok = np.zeros((alive.size, rolls.size), dtype=bool)
+    ok = np.zeros((alive.size, rolls.size, shifts.size), dtype=bool)
     for start in range(0, alive.size, config.batch_lines):
         rows = np.arange(start, min(start + config.batch_lines, alive.size))
         sel = alive[rows]
-        hit = body_hits(obstacles, cands, sel, swept[sel])
-        ok[rows] = clear[sel] & ~hit
+        for k, s in enumerate(shifts):
+            if not clear[sel, :, k].any():
+                continue
+            boxes = swept[sel].copy()
+            boxes[..., 2] -= s  # the hand moved back by s along its approach
+            ok[rows, :, k] = clear[sel, :, k] & ~body_hits(obstacles, cands, sel, boxes)
         if first_only and ok[rows].any():
-            rows_done = rows[-1] + 1
-            return _subset(lines, alive[:rows_done]), ok[:rows_done], alive[:rows_done]
+            done = rows[-1] + 1
+            return _subset(lines, alive[:done]), ok[:done], alive[:done]
     return _subset(lines, alive), ok, alive
 
 
@@ -219,13 +284,16 @@ def oracle_candidates(
     seed: int,
     first_only: bool = False,
 ) -> tuple[CandidateSet, NDArray[np.int64]]:
-    """The scene's antipodal candidates with ``rejected_by`` and ``scores`` filled, and the index
-    of the object (in ``truth.objects``) each candidate grasps. ``first_only``: per object, stop
-    once a feasible pose is found (enough to tell whether it is graspable)."""
+    """The scene's feasible-or-not poses (one roll per line: :func:`_poses`) with
+    ``rejected_by`` and ``scores`` filled, and the index of the object (in ``truth.objects``)
+    each grasps. ``first_only``: per object, stop once a feasible pose is found (enough to tell
+    whether it is graspable)."""
     grasp_cfg = resolve_config(config.planner_config).grasp
+    hand = truth.hand if truth.hand is not None else _default_hand()
     rng = np.random.default_rng(seed)
     max_width = gripper.max_opening_m - grasp_cfg.opening_margin_m
     rolls = np.deg2rad(np.arange(0.0, 360.0, config.roll_step_deg))
+    shifts = np.linspace(0.0, hand.pad_z_m[1] - config.pad_edge_margin_m, config.contact_shifts)
     plane = np.asarray(truth.support_plane, float)
     surfaces = [_surface_points(o, config, rng) for o in truth.objects]
     lows = np.array([s.min(axis=0) for s in surfaces]).reshape(-1, 3)
@@ -234,26 +302,36 @@ def oracle_candidates(
     reach *= np.sqrt(3.0)  # the farthest box corner from the TCP, at most
     parts, feasible, quality, owner = [], [], [], []
     for k, obj in enumerate(truth.objects):
-        lines, q = antipodal_lines(obj, max_width, config, rng)
+        mu = config.friction_coefficient or hand.contact_friction(obj)
+        lines, q = antipodal_lines(obj, max_width, mu, config, rng)
         # Only objects within the hand's reach of this one can be in its way.
         near = np.all((lows <= highs[k] + reach) & (highs >= lows[k] - reach), axis=1)
         obstacles = np.concatenate([surfaces[m] for m in np.flatnonzero(near)])
         kept, ok, index = _object_search(
-            lines, rolls, obstacles, gripper, grasp_cfg, plane, config, rng, first_only
-        )
-        parts.append(kept)
-        feasible.append(ok)
-        quality.append(q[index])
-        owner.append(np.full(len(kept), k))
+            lines, rolls, obstacles, hand, gripper, grasp_cfg, plane, shifts, config, rng,
+            first_only,
+        )  # fmt: skip
+        poses, pose_ok = _poses(kept, rolls, ok, shifts)
+        parts.append(poses)
+        feasible.append(pose_ok)
+        quality.append(np.repeat(q[index], rolls.size))
+        owner.append(np.full(len(poses), k))
     lines = ClosingLines.concatenate(parts)
-    cands = CandidateSet(lines, rolls)
-    removed = ~np.concatenate(feasible).ravel() if parts else np.zeros(0, dtype=bool)
+    cands = CandidateSet(lines, np.zeros(1))
+    removed = ~np.concatenate(feasible) if parts else np.zeros(0, dtype=bool)
     cands.rejected_by[removed] = "collision"
-    q = np.repeat(np.concatenate(quality) if quality else np.zeros(0), rolls.size)
+    q = np.concatenate(quality) if quality else np.zeros(0)
     downness = np.maximum(0.0, -cands.rotations[:, 2, 2]) if len(cands) else np.zeros(0)
     cands.scores = np.where(removed, np.nan, q * (0.5 + 0.5 * downness))
     owners = np.concatenate(owner) if owner else np.zeros(0, dtype=np.int64)
-    return cands, np.repeat(owners, rolls.size)
+    return cands, owners
+
+
+def _default_hand() -> HandTruth:
+    """The Panda's hand for a scene made outside the simulator (``SceneTruth.hand`` None)."""
+    from hsqbench.sim.scene_truth import panda_hand
+
+    return panda_hand()
 
 
 def feasible_grasps(

@@ -208,7 +208,13 @@ class TrialEnv:
         names = self.objects_on_table()
         seed = int(self.rngs["oracle"].integers(2**31))
         return scene_truth(
-            self.model, self.data, self.info.object_geom_ids, names, self.info.support_plane, seed
+            self.model,
+            self.data,
+            self.info.object_geom_ids,
+            names,
+            self.info.support_plane,
+            seed,
+            self.panda,
         )
 
     def graspable_objects(self, truth: Any) -> list[str] | None:
