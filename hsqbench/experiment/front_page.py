@@ -176,10 +176,7 @@ ISOLATED_UNSEEN: Columns = (
 PACKED: Columns = (
     *GSR_CELLS,
     *CR_CELLS,
-    (
-        "GSR / CR, graspable",
-        lambda r: _graspable_pair(r.graspable_gsr_percent, r.graspable_cr_percent),
-    ),
+    ("CR, graspable at start", lambda r: _pct(r.graspable_cr_percent)),
 )
 PILE: Columns = (*GSR_CELLS, *KN_CELL, *CR_CELLS)
 
@@ -231,10 +228,6 @@ def packed_table(run: Run, reported: bool = True) -> str:
 def pile_table(run: Run) -> str:
     """Table IV: pile GSR and CR, CR paired to hsq (GIGA's reported row last, as context)."""
     return _render(run, TABLE4_CSV, PILE, "pile CR", reported=True)
-
-
-def _graspable_pair(gsr: float, cr: float) -> str:
-    return "" if not np.isfinite(gsr) else f"{gsr:.1f} / {_pct(cr)}"
 
 
 #: README block name -> (run folder under results/, table writer).

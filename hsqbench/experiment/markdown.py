@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from hsqbench.experiment.graspable import PRIVILEGED_NOTE, has_graspability
+from hsqbench.experiment.graspable import PRIVILEGED_NOTE, coverage_from_rows, has_graspability
 from hsqbench.experiment.reported import CITATION, PROVENANCE, reported_rows
 from hsqbench.experiment.results import STATUS_ERROR
 from hsqbench.experiment.run_data import MEASURED, RunData
@@ -100,7 +100,8 @@ def _table1(data: RunData, t1: pd.DataFrame, conf: str, graspability: bool) -> l
     if graspability:
         out += [
             "Over all presentations, and over the graspable ones (the oracle found a feasible "
-            "grasp on the true meshes at that pose).",
+            "grasp on the true meshes at that pose, the same pose for every planner). "
+            '"Ungraspable won": successes on presentations the oracle calls ungraspable.',
             "",
         ]
     rows = []
@@ -112,6 +113,7 @@ def _table1(data: RunData, t1: pd.DataFrame, conf: str, graspability: bool) -> l
                 _pct(r["graspable_gsr_percent"]) if measured else "—",
                 _interval(r, "graspable_") if measured else "—",
                 _kn(r, "graspable_successes", "graspable_attempts") if measured else "—",
+                _kn(r, "ungraspable_successes", "ungraspable_attempts") if measured else "—",
             ]
         rows.append(
             [
@@ -126,9 +128,18 @@ def _table1(data: RunData, t1: pd.DataFrame, conf: str, graspability: bool) -> l
         )
     heads = ["method", "GSR", f"{conf} CI", "k/n"]
     if graspability:
-        heads += ["GSR graspable", f"{conf} CI", "k/n graspable"]
+        heads += ["GSR graspable", f"{conf} CI", "k/n graspable", "ungraspable won"]
     out += [md_table([*heads, *ERROR_HEADS, "source"], rows), ""]
+    out += _coverage(data, "isolated") if graspability else []
     return out
+
+
+def _coverage(data: RunData, experiment: str) -> list[str]:
+    """The line that says whether the oracle is a ceiling for ``experiment``'s presentations."""
+    cov = coverage_from_rows(data.attempts, data.rounds)
+    if cov is None or experiment not in cov.parts:
+        return []
+    return [cov.line(experiment), ""]
 
 
 def _table1_per_object(data: RunData, t1o: pd.DataFrame, graspability: bool) -> list[str]:
@@ -172,10 +183,9 @@ def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> l
         extra = []
         if graspability:
             extra = [
-                _pct(r["graspable_gsr_percent"]) if measured else "—",
-                _interval(r, "graspable_gsr_") if measured else "—",
                 _pct(r["graspable_cr_percent"]) if measured else "—",
                 _interval(r, "graspable_cr_") if measured else "—",
+                _kn(r, "ungraspable_successes", "ungraspable_presented") if measured else "—",
             ]
         rows.append(
             [
@@ -192,7 +202,7 @@ def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> l
         )
     headers = ["method", "GSR", f"GSR {conf} CI", "CR", f"CR {conf} CI"]
     if graspability:
-        headers += ["GSR graspable", f"{conf} CI", "CR graspable", f"{conf} CI"]
+        headers += ["CR graspable", f"{conf} CI", "ungraspable won"]
     headers += ["rounds", *ERROR_HEADS]
     out += [md_table([*headers, "source"], rows), ""]
     out += [
@@ -201,6 +211,14 @@ def _table2(data: RunData, t2: pd.DataFrame, conf: str, graspability: bool) -> l
         + ("; the graspable columns' intervals are Wilson." if graspability else "."),
         "",
     ]
+    if graspability:
+        out += [
+            "CR graspable: over the objects the oracle can grasp in each round's initial scene "
+            '(the same scene for every planner); "ungraspable won": objects grasped of those '
+            "it cannot.",
+            "",
+        ]
+        out += _coverage(data, "packed")
     return out
 
 
@@ -256,8 +274,9 @@ def _notes(data: RunData, graspability: bool) -> list[str]:
         *(
             [
                 "- Graspable: the oracle (privileged) found a feasible grasp on the true meshes "
-                "of that presentation; CR graspable counts the objects graspable in the settled "
-                "scene before the first attempt.",
+                "of a scene every planner shares: an isolated presentation, or a round's "
+                "initial scene (CR graspable counts the objects graspable there). Packed GSR is "
+                "not conditioned on it: later attempts' scenes are each planner's own.",
                 f"- Rows marked (privileged): {PRIVILEGED_NOTE}.",
             ]
             if graspability

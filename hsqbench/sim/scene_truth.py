@@ -45,7 +45,9 @@ def _geom_vertices(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> NDArra
         local = model.mesh_vert[start : start + count].astype(float)
         local = local[ConvexHull(local).vertices]
     else:
-        raise ValueError(f"hand geom {g}: only boxes and meshes are read, got type {model.geom_type[g]}")
+        raise ValueError(
+            f"hand geom {g}: only boxes and meshes are read, got type {model.geom_type[g]}"
+        )
     return local @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
 
 

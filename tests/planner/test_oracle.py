@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from hsqbench.planner.api import PlanningContext
 from hsqbench.planner.oracle import OraclePlanner, feasible_grasps, load_oracle_config
 from hsqbench.planner.truth import ObjectTruth, SceneTruth
+from hsqbench.sim.scene_truth import panda_hand
 
 TABLE = (0.0, 0.0, 1.0, 0.0)
 
@@ -52,7 +55,7 @@ def test_grasps_pinch_opposite_faces_and_stay_off_the_table(oracle):
     assert len(plan.grasps) > 0
     for g in list(plan.grasps)[:20]:
         closing = g.rotation[:, 0]
-        assert abs(closing[0]) > np.cos(np.arctan(oracle.config.friction_coefficient)) - 1e-9
+        assert abs(closing[0]) > np.cos(np.arctan(panda_hand().pad_friction)) - 1e-9
         # Both contacts on the two 4 cm-apart faces: the line spans exactly 4 cm along x.
         assert g.width * abs(closing[0]) == pytest.approx(0.04, abs=1e-9)
         # Contacts at most 6 cm up: a hand coming from below would have its palm in the table.
@@ -93,7 +96,7 @@ def test_same_seed_same_grasps_and_the_config_is_checked():
     a = p.plan(None, PlanningContext(support_plane=TABLE, truth=truth, seed=3))
     b = p.plan(None, PlanningContext(support_plane=TABLE, truth=truth, seed=3))
     np.testing.assert_array_equal(a.grasps[0].position, b.grasps[0].position)
-    assert load_oracle_config().friction_coefficient > 0
+    assert load_oracle_config().contact_shifts >= 1
 
 
 def test_the_planner_finds_grasps_exactly_where_the_check_says_graspable(oracle):
@@ -108,3 +111,50 @@ def test_the_planner_finds_grasps_exactly_where_the_check_says_graspable(oracle)
         plan = oracle.plan(None, PlanningContext(support_plane=TABLE, truth=truth, seed=99))
         assert (counts[obj.name] > 0) == (len(plan.grasps) > 0)
         assert len(plan.grasps) >= counts[obj.name]
+
+
+def prism(name: str, side: float, length: float, centre=(0.5, 0.0)) -> ObjectTruth:
+    """A prism of equilateral cross-section lying on a face, its axis along y."""
+    tri = np.array([[-side / 2, 0.0], [side / 2, 0.0], [0.0, side * np.sqrt(3) / 2]])
+    v = np.array([[x, y, z] for y in (-length / 2, length / 2) for x, z in tri])
+    return ObjectTruth(name, (v + np.array([centre[0], centre[1], 0.0]),))
+
+
+def test_a_thin_flat_box_on_the_table_is_graspable_near_the_fingertips(oracle):
+    # 1 cm tall: the fingertips reach 8.9 mm past the TCP, so contacts at the TCP would put
+    # them into the table; the contacts sit lower on the pads with the hand held up.
+    flat = box("flat", [0.02, 0.20, 0.01])
+    truth = SceneTruth((flat,), TABLE, seed=0)
+    assert feasible_grasps(truth, oracle.gripper, oracle.config, 0)["flat"] > 0
+    hand = panda_hand()
+    for g in list(oracle.plan(None, PlanningContext(support_plane=TABLE, truth=truth)).grasps):
+        # No vertex of the true fingers comes within the clearance of the table.
+        for finger, side in ((hand.left_finger, 1), (hand.right_finger, -1)):
+            local = finger + np.array([side * 0.5 * g.approach_width, 0.0, 0.0])
+            world = g.position + local @ g.rotation.T
+            assert world[:, 2].min() >= oracle.config.table_clearance_m - 1e-9
+
+
+def test_the_contact_friction_is_the_simulations_not_a_narrower_cone(oracle):
+    # Every pair of faces of an equilateral prism is 60 deg off antipodal: a closing line needs
+    # mu >= tan 30 deg = 0.58; the ends are 12 cm apart, wider than the hand opens.
+    truth = SceneTruth((prism("prism", 0.05, 0.12),), TABLE)
+    assert panda_hand().contact_friction(truth.objects[0]) >= 1.0  # pads 1.0 (robot.yaml)
+    assert feasible_grasps(truth, oracle.gripper, oracle.config, 0)["prism"] > 0
+    narrow = dataclasses.replace(oracle.config, friction_coefficient=0.5)
+    assert feasible_grasps(truth, oracle.gripper, narrow, 0)["prism"] == 0
+
+
+def test_a_ball_no_chord_of_which_the_pads_can_hold_is_not_graspable(oracle):
+    # A 12 cm ball: a chord the 8 cm hand spans meets the surface at >= 50 deg off its normal,
+    # beyond the pads' friction cone (45 deg at mu 1).
+    ball = ObjectTruth("ball", (_sphere(0.06, (0.5, 0.0, 0.06)),))
+    truth = SceneTruth((ball,), TABLE)
+    assert feasible_grasps(truth, oracle.gripper, oracle.config, 0)["ball"] == 0
+
+
+def _sphere(radius: float, centre) -> np.ndarray:
+    """Vertices of a fine polyhedral sphere."""
+    u, v = np.meshgrid(np.linspace(0, np.pi, 24), np.linspace(0, 2 * np.pi, 48))
+    pts = np.stack([np.sin(u) * np.cos(v), np.sin(u) * np.sin(v), np.cos(u)], -1).reshape(-1, 3)
+    return np.unique(np.round(pts, 9), axis=0) * radius + centre

@@ -52,7 +52,8 @@ def measured_rates(data: RunData) -> pd.DataFrame:
                 rows += _cells(
                     exp, "gsr", p, "all", Rate.of(int(mine["success"].sum()), len(mine), conf)
                 )
-                rows += _cells(exp, "gsr", p, "graspable", gsr_graspable(mine, conf))
+                if exp == "isolated":  # packed GSR is not conditioned (graspable.py)
+                    rows += _cells(exp, "gsr", p, "graspable", gsr_graspable(mine, conf))
             rounds = done[done["planner"] == p] if exp != "isolated" and len(done) else done[:0]
             if int(rounds["n_objects"].sum() if len(rounds) else 0):
                 cleared, shown = int(rounds["n_cleared"].sum()), int(rounds["n_objects"].sum())

@@ -28,6 +28,12 @@ STREAMS = ("perception_calibration", "perception_noise", "ik", "planner", "oracl
 LOOK_STREAMS = ("perception_calibration", "perception_noise", "oracle")
 
 
+def trial_rngs(seed: int) -> dict[str, np.random.Generator]:
+    """The trial's random streams (:data:`STREAMS`), each from its own ``SeedSequence`` child."""
+    streams = np.random.SeedSequence(seed).spawn(len(STREAMS))
+    return {n: np.random.default_rng(s) for n, s in zip(STREAMS, streams, strict=True)}
+
+
 class TrialEnv:
     """A built scene with everything an attempt needs (robot handles, IK, probe, sensor).
 
@@ -51,8 +57,7 @@ class TrialEnv:
         self.config = config
         self.seed = seed
         self.recorder = recorder
-        streams = np.random.SeedSequence(seed).spawn(len(STREAMS))
-        self.rngs = {n: np.random.default_rng(s) for n, s in zip(STREAMS, streams, strict=True)}
+        self.rngs = trial_rngs(seed)
         self.panda = Panda(model, info.robot_prefix)
         obstacles = np.array([info.table_geom_id, *info.bin_geom_ids], dtype=int)
         self.ik = ArmIK(model, self.panda, config.ik, obstacles)
