@@ -275,16 +275,8 @@ class ContactGraspNetPlanner(PlannerBase):
         timings["network"] = time.perf_counter() - tick
 
         n = positions.shape[0]
-        lines = ClosingLines(
-            centres=positions,
-            directions=rotations[:, :, 0],
-            approach0=rotations[:, :, 2],
-            half_lengths=0.5 * widths,
-            source=np.full(n, -1, dtype=np.int64),
-            axis=np.full(n, -1, dtype=np.int64),
-            family=np.full(n, FAMILY, dtype="<U12"),
-        )
-        cands = CandidateSet(lines, np.zeros(1))
+        cands = _candidates(positions, rotations, widths)
+        lines = cands.lines
         tick = time.perf_counter()
         remaining = {"synthesised": n}
         if cfg.eliminate:
@@ -313,3 +305,18 @@ class ContactGraspNetPlanner(PlannerBase):
             timings=timings,
             reason="" if grasps else _no_grasp_reason(n, counts, cfg),
         )
+
+
+def _candidates(positions: Array, rotations: Array, widths: Array) -> CandidateSet:
+    """The network's grasps as closing lines (no superquadric made them), for the shared rules."""
+    n = positions.shape[0]
+    lines = ClosingLines(
+        centres=positions,
+        directions=rotations[:, :, 0],
+        approach0=rotations[:, :, 2],
+        half_lengths=0.5 * widths,
+        source=np.full(n, -1, dtype=np.int64),
+        axis=np.full(n, -1, dtype=np.int64),
+        family=np.full(n, FAMILY, dtype="<U12"),
+    )
+    return CandidateSet(lines, np.zeros(1))

@@ -219,34 +219,11 @@ class VolumetricPlanner(PlannerBase):
 
     def stages(self, clean: CleanInput, context: PlanningContext) -> PlanResult:
         """Cubes, TSDF, network and detection (module notes)."""
-        cfg, grid = self.config, self.config.grid
-        views = context.depth_views
-        if not views:
-            raise ValueError(
-                f"the {self.name} planner reads the depth images (PlanningContext.depth_views); "
-                "the harness's trials pass them, a saved cloud alone cannot be planned on"
-            )
-        plane = validate_plane(context.support_plane)
-        if plane is None or abs(plane[2]) < 0.5:
-            raise ValueError(
-                f"the {self.name} planner needs the table plane (PlanningContext.support_plane) "
-                "with its normal near the world's z axis"
-            )
+        cfg = self.config
+        views, plane = self._inputs(context)
         timings: dict[str, float] = {}
         tick = time.perf_counter()
-        shape = (grid.voxels,) * 3
-        trunc = grid.truncation_voxels * grid.voxel_m
-        cubes = []  # (yaw rotation, origins, centres, grids) per input
-        for yaw, seen in input_frames(views, clean.points, cfg.input):
-            local = clean.points @ yaw  # the cloud in the yawed frame (p' = R^T p)
-            local_plane = np.concatenate([plane[:3] @ yaw, plane[3:]])
-            origins, centres = cube_origins(local, local_plane, cfg)
-            local_views = [yawed_view(v, yaw) for v in seen]
-            grids = [
-                tsdf.integrate(self._cube_views(local_views, o), o, grid.voxel_m, shape, trunc)
-                for o in origins
-            ]
-            cubes.append((yaw, origins, centres, grids))
+        cubes = self._cubes(views, clean.points, plane)
         inputs = np.stack([g.network_input() for *_, grids in cubes for g in grids])
         valid = np.stack([detection.valid_centres(x, cfg.detection) for x in inputs])
         timings["tsdf"] = time.perf_counter() - tick
@@ -286,6 +263,40 @@ class VolumetricPlanner(PlannerBase):
             reason=reason,
             surface_points=surface,
         )
+
+    def _inputs(self, context: PlanningContext) -> tuple[Any, Array]:
+        """The depth views and the table plane, or a ValueError saying which is missing."""
+        if not context.depth_views:
+            raise ValueError(
+                f"the {self.name} planner reads the depth images (PlanningContext.depth_views); "
+                "the harness's trials pass them, a saved cloud alone cannot be planned on"
+            )
+        plane = validate_plane(context.support_plane)
+        if plane is None or abs(plane[2]) < 0.5:
+            raise ValueError(
+                f"the {self.name} planner needs the table plane (PlanningContext.support_plane) "
+                "with its normal near the world's z axis"
+            )
+        return context.depth_views, plane
+
+    def _cubes(self, views: Any, points: Array, plane: Array) -> list[tuple[Any, ...]]:
+        """``[(yaw rotation, origins, centres, TSDF grids)]``, one per network input
+        (:func:`input_frames`), the cubes tiled over the cloud in that input's yawed frame."""
+        cfg, grid = self.config, self.config.grid
+        shape = (grid.voxels,) * 3
+        trunc = grid.truncation_voxels * grid.voxel_m
+        cubes = []
+        for yaw, seen in input_frames(views, points, cfg.input):
+            local = points @ yaw  # the cloud in the yawed frame (p' = R^T p)
+            local_plane = np.concatenate([plane[:3] @ yaw, plane[3:]])
+            origins, centres = cube_origins(local, local_plane, cfg)
+            local_views = [yawed_view(v, yaw) for v in seen]
+            grids = [
+                tsdf.integrate(self._cube_views(local_views, o), o, grid.voxel_m, shape, trunc)
+                for o in origins
+            ]
+            cubes.append((yaw, origins, centres, grids))
+        return cubes
 
     def _cube_views(self, views: list[Any], origin: Array) -> list[Any]:
         """The images a cube's TSDF is integrated from: the cameras' own, or (``viewpoint:
