@@ -111,6 +111,18 @@ FINISHED_AT = Column("finished_at", "text", "ISO 8601, UTC", "when the row was w
 
 FACTOR_NAMES = ("h_alpha", "h_beta", "h_gamma", "h_delta")
 
+#: The last columns of both tables: the scene's settling, the trial's wall time and where and
+#: by what code the row was written.
+_PROVENANCE: tuple[Column, ...] = (
+    SCENE_SETTLE_S,
+    SCENE_MAX_SPEED,
+    TRIAL_WALL_S,
+    WORKER,
+    CONFIG_HASH,
+    CODE_VERSION,
+    FINISHED_AT,
+)
+
 ATTEMPTS: tuple[Column, ...] = (
     TRIAL_KEY,
     Column("experiment", "text", "text", "`isolated`, `packed` or `pile`"),
@@ -273,13 +285,7 @@ ATTEMPTS: tuple[Column, ...] = (
         "why the attempt ended so, in words (which contact, which IK step, ...); on an error "
         "row, the error",
     ),
-    SCENE_SETTLE_S,
-    SCENE_MAX_SPEED,
-    TRIAL_WALL_S,
-    WORKER,
-    CONFIG_HASH,
-    CODE_VERSION,
-    FINISHED_AT,
+    *_PROVENANCE,
 )
 
 ROUNDS: tuple[Column, ...] = (
@@ -319,13 +325,7 @@ ROUNDS: tuple[Column, ...] = (
         "draws rejected before the round's objects (not placeable, or a pile that did not "
         "settle), or the error",
     ),
-    SCENE_SETTLE_S,
-    SCENE_MAX_SPEED,
-    TRIAL_WALL_S,
-    WORKER,
-    CONFIG_HASH,
-    CODE_VERSION,
-    FINISHED_AT,
+    *_PROVENANCE,
 )
 
 ATTEMPT_COLUMNS: tuple[str, ...] = tuple(c.name for c in ATTEMPTS)
