@@ -221,3 +221,25 @@ def test_their_packed_generation_places_upright_boxes_apart_on_the_table(tmp_pat
         assert world.touching_objects(name) == []  # placed apart
     half = world.model.geom_size[world.geom_ids["box0"][0]].max()
     assert half == pytest.approx(0.8 * 0.03, abs=1e-4)  # the 6 cm side scaled 0.8
+
+
+def test_round_tally_clears_only_successes_and_marks_the_lost():
+    from hsqbench.sim.clutter.step import RoundTally
+    from hsqbench.sim.outcome import Attempt, Outcome
+
+    tally = RoundTally()
+    won = Attempt(Outcome.SUCCESS, target="apple")
+    missed = Attempt(Outcome.DROPPED, target="banana", detail="dropped")
+    tally.record(won)
+    tally.record(missed)
+    tally.lose(missed, ["banana"])
+    assert tally.outcomes == ["success", "dropped"]
+    assert tally.cleared == ["apple"] and tally.lost == ["banana"]
+    assert missed.detail == "dropped; banana left the workspace (taken out, not cleared)"
+    r = tally.result(["apple", "banana"], ["dice"], 7, "oracle")
+    assert (r.objects_cleared, r.objects_lost, r.objects_unplaced) == (
+        ["apple"],
+        ["banana"],
+        ["dice"],
+    )
+    assert r.planner == "oracle" and r.clearance_rate == 0.5

@@ -26,10 +26,10 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from hsqbench.sim.clutter.step import plan_step, round_streams
+from hsqbench.sim.clutter.step import RoundTally, plan_step, round_streams
 from hsqbench.sim.clutter.world import ClutterWorld, camera_eyes, look_at_quat
 from hsqbench.sim.motion import SimUnstable
-from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
+from hsqbench.sim.outcome import Attempt, Outcome
 from hsqbench.sim.recorded_pose import pose7
 from hsqbench.sim.recorder import NullRecorder
 from hsqbench.sim.scene.info import DepthCamera
@@ -131,45 +131,28 @@ def run_arm_round(world: ClutterWorld, kind: str, seed: int, planner: Any, confi
     from hsqbench.sim.trial.release import return_home
 
     plan_with = resolve_planner(planner, config)
-    name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
     presented = [n for n in world.objects if n in world.in_play]
     env, origin = arm_env(world, kind, seed, config)
     rngs = round_streams(seed)
     env.rngs.update({n: rngs[n] for n in ("perception_calibration", "perception_noise")})
-    attempts: list[Attempt] = []
-    cleared: list[str] = []
-    lost: list[str] = []
-    outcomes: list[str] = []
+    tally = RoundTally()
     rule = world.config.rule
     with env:
-        while rule.stop_reason(outcomes, bool(env.objects_on_table())) is None:
+        while rule.stop_reason(tally.outcomes, bool(env.objects_on_table())) is None:
             attempt = _arm_attempt(env, plan_with, kind, config, rngs)
-            attempts.append(attempt)
-            outcomes.append(attempt.outcome.value)
+            tally.record(attempt)
             if attempt.outcome in (Outcome.NO_GRASP_FOUND, Outcome.SIM_UNSTABLE):
                 continue
             if attempt.outcome == Outcome.SUCCESS:
                 env.remove(attempt.target)  # taken out of the hand before it opens
-                cleared.append(attempt.target)
             try:
                 return_home(env)
                 gone = _remove_and_wait(env, origin, world)
             except SimUnstable as exc:
                 attempt.detail += f"; then the simulation became unstable: {exc}"
                 break
-            lost += gone
-            for n in gone:
-                attempt.detail += f"; {n} left the workspace (taken out, not cleared)"
-    return RoundResult(
-        objects=presented,
-        seed=seed,
-        planner=name,
-        attempts=attempts,
-        objects_cleared=cleared,
-        objects_graspable=None,
-        objects_lost=lost,
-        objects_unplaced=[n for n in world.objects if n not in presented],
-    )
+            tally.lose(attempt, gone)
+    return tally.result(presented, [n for n in world.objects if n not in presented], seed, planner)
 
 
 def _arm_attempt(env: Any, planner: Any, kind: str, config: Any, rngs: dict) -> Attempt:

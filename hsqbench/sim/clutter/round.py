@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from hsqbench.sim.clutter.execution import execute_hand_grasp
-from hsqbench.sim.clutter.step import plan_step, round_streams
+from hsqbench.sim.clutter.step import RoundTally, plan_step, round_streams
 from hsqbench.sim.clutter.world import ClutterWorld
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
 from hsqbench.sim.recorded_pose import pose7
@@ -60,40 +60,19 @@ def run_hand_round(
 
     clutter = world.config
     plan_with = resolve_planner(planner, config)
-    name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
     presented = [n for n in world.objects if n in world.in_play]
     rngs = round_streams(seed)
     perception = _perception(world, rngs["perception_calibration"])
-    attempts: list[Attempt] = []
-    cleared: list[str] = []
-    lost: list[str] = []
-    outcomes: list[str] = []
+    tally = RoundTally()
     try:
-        while clutter.rule.stop_reason(outcomes, bool(world.in_play)) is None:
+        while clutter.rule.stop_reason(tally.outcomes, bool(world.in_play)) is None:
             attempt = _attempt(world, perception, plan_with, rngs, kind, config)
-            attempts.append(attempt)
-            outcomes.append(attempt.outcome.value)
-            if attempt.outcome == Outcome.SUCCESS:
-                cleared.append(attempt.target)
+            tally.record(attempt)
             if attempt.outcome not in (Outcome.NO_GRASP_FOUND,):
-                gone = world.remove_and_wait()
-                lost += gone
-                for n in gone:
-                    attempt.detail += f"; {n} left the workspace (taken out, not cleared)"
+                tally.lose(attempt, world.remove_and_wait())
     finally:
         perception.close()
-    return RoundResult(
-        objects=presented,
-        seed=seed,
-        planner=name,
-        attempts=attempts,
-        objects_cleared=cleared,
-        objects_graspable=None,
-        objects_lost=lost,
-        scene_settle_s=float("nan"),
-        scene_max_speed=float("nan"),
-        objects_unplaced=[n for n in world.objects if n not in presented],
-    )
+    return tally.result(presented, [n for n in world.objects if n not in presented], seed, planner)
 
 
 def _attempt(

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from hsqbench.planner.failure import PlannerError, checked_plan
-from hsqbench.sim.outcome import Attempt, Outcome
+from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
 
 #: Independent random streams drawn from a round's seed (the scene has the seed itself).
 STREAMS = ("perception_calibration", "perception_noise", "planner", "oracle")
@@ -21,6 +21,47 @@ def round_streams(seed: int) -> dict[str, np.random.Generator]:
     """The round's random streams (:data:`STREAMS`), the same for the hand and the arm."""
     streams = np.random.SeedSequence([seed, 1]).spawn(len(STREAMS))
     return {n: np.random.default_rng(s) for n, s in zip(STREAMS, streams, strict=True)}
+
+
+@dataclass
+class RoundTally:
+    """What a round has done so far, kept the same way by the hand's round and the arm's."""
+
+    attempts: list[Attempt] = field(default_factory=list)
+    cleared: list[str] = field(default_factory=list)
+    lost: list[str] = field(default_factory=list)
+
+    @property
+    def outcomes(self) -> list[str]:
+        """The attempts' outcomes in order, as the stop rule reads them."""
+        return [a.outcome.value for a in self.attempts]
+
+    def record(self, attempt: Attempt) -> None:
+        self.attempts.append(attempt)
+        if attempt.outcome == Outcome.SUCCESS:
+            self.cleared.append(attempt.target)
+
+    def lose(self, attempt: Attempt, gone: list[str]) -> None:
+        """``gone`` left the workspace after ``attempt``: taken out, not cleared."""
+        self.lost += gone
+        for n in gone:
+            attempt.detail += f"; {n} left the workspace (taken out, not cleared)"
+
+    def result(
+        self, objects: list[str], unplaced: list[str], seed: int, planner: Any
+    ) -> RoundResult:
+        """The round's result; ``planner`` a name or a planner."""
+        name = planner if isinstance(planner, str) else str(getattr(planner, "name", planner))
+        return RoundResult(
+            objects=objects,
+            seed=seed,
+            planner=name,
+            attempts=self.attempts,
+            objects_cleared=self.cleared,
+            objects_graspable=None,
+            objects_lost=self.lost,
+            objects_unplaced=unplaced,
+        )
 
 
 @dataclass
