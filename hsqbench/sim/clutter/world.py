@@ -168,12 +168,6 @@ class ClutterWorld:
         others = {int(b) for pair in bodies if me in pair for b in pair if b != me}
         return [o for o in self.in_play if self.body_ids[o] in others]
 
-    def name_of(self, body: int) -> str | None:
-        for n, b in self.body_ids.items():
-            if b == body:
-                return n
-        return None
-
     def remove_walls(self) -> None:
         self.model.geom_contype[self.wall_geoms] = 0
         self.model.geom_conaffinity[self.wall_geoms] = 0
