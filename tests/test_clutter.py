@@ -243,3 +243,15 @@ def test_round_tally_clears_only_successes_and_marks_the_lost():
         ["dice"],
     )
     assert r.planner == "oracle" and r.clearance_rate == 0.5
+
+
+def test_a_hand_round_on_one_box_clears_it_and_stops_on_a_clear_table(compiled) -> None:
+    from hsqbench.sim.clutter.round import run_hand_round
+    from hsqbench.sim.trial import load_trial_config
+
+    world, box = _fresh(compiled)
+    result = run_hand_round(world, "packed", 0, "oracle", load_trial_config("trial_clutter"))
+    assert [a.outcome for a in result.attempts] == [Outcome.SUCCESS]
+    assert result.objects == [box] and result.objects_cleared == [box]
+    assert result.objects_lost == [] and result.objects_unplaced == []
+    assert result.planner == "oracle" and result.seed == 0
