@@ -12,6 +12,7 @@ import numpy as np
 
 from hsqbench.planner.failure import PlannerError, checked_plan
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
+from hsqbench.sim.trial.attempt import plan_fields
 
 #: Independent random streams drawn from a round's seed (the scene has the seed itself).
 STREAMS = ("perception_calibration", "perception_noise", "planner", "oracle")
@@ -120,14 +121,7 @@ def plan_step(
         )
     planning_s = time.perf_counter() - t1
     grasps = plan.grasps
-    n_top = min(len(grasps), config.recorded_scores)
-    common = {
-        "n_grasps": len(grasps),
-        "perception_s": perception_s,
-        "planning_s": planning_s,
-        "top_scores": tuple(float(grasps[i].score) for i in range(n_top)),
-        "planner_stages_s": {k: float(v) for k, v in plan.timings.items()},
-    }
+    common = plan_fields(plan, perception_s, planning_s, config.recorded_scores)
     if not len(grasps):
         detail = plan.reason or "the planner returned no grasp"
         return Planned(Attempt(Outcome.NO_GRASP_FOUND, detail=detail, **common))

@@ -128,6 +128,20 @@ def plan_motions(env: TrialEnv, grasps: Any, points: Any, trace: AttemptTrace) -
     return MotionPlan(-1, None, reasons)
 
 
+def plan_fields(
+    plan: Any, perception_s: float, planning_s: float, recorded_scores: int
+) -> dict[str, Any]:
+    """What every attempt records of its look and plan (the trial's and the clutter round's)."""
+    n_top = min(len(plan.grasps), recorded_scores)
+    return {
+        "n_grasps": len(plan.grasps),
+        "perception_s": perception_s,
+        "planning_s": planning_s,
+        "top_scores": tuple(float(plan.grasps[i].score) for i in range(n_top)),
+        "planner_stages_s": {k: float(v) for k, v in plan.timings.items()},
+    }
+
+
 def _pose_of(env: TrialEnv, presented: dict[str, Any], name: str) -> dict[str, Any]:
     # The target's pose as perceived (nothing has moved yet); isolated scenes have it already.
     if "object_pose" in presented or not name:
@@ -174,15 +188,7 @@ def run_attempt(env: TrialEnv, planner: Any, packed: bool) -> tuple[Attempt, Att
     planning_s = time.perf_counter() - t0
     if rec.enabled:
         rec.on_plan(plan)
-    n_top = min(len(plan.grasps), cfg.recorded_scores)
-    common = {
-        "n_grasps": len(plan.grasps),
-        "perception_s": perception_s,
-        "planning_s": planning_s,
-        "top_scores": tuple(float(plan.grasps[i].score) for i in range(n_top)),
-        "planner_stages_s": {k: float(v) for k, v in plan.timings.items()},
-        **presented,
-    }
+    common = {**plan_fields(plan, perception_s, planning_s, cfg.recorded_scores), **presented}
     if not len(plan.grasps):
         detail = plan.reason or "the planner returned no grasp"
         return _finish(env, Attempt(Outcome.NO_GRASP_FOUND, detail=detail, **common), trace)
