@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 
 from hsqbench.sim.clutter.step import RoundTally, plan_step, round_streams
-from hsqbench.sim.clutter.world import ClutterWorld, camera_eyes, look_at_quat
+from hsqbench.sim.clutter.world import CAMERA_PREFIX, ClutterWorld, add_cameras, outside_cube
 from hsqbench.sim.motion import SimUnstable
 from hsqbench.sim.outcome import Attempt, Outcome
 from hsqbench.sim.recorded_pose import pose7
@@ -35,8 +35,6 @@ from hsqbench.sim.recorder import NullRecorder
 from hsqbench.sim.scene.info import DepthCamera
 from hsqbench.sim.scene.settled import compile_settled
 from hsqbench.sim.scene.world import compose_posed, describe_scene
-
-CAMERA_PREFIX = "clutter_cam"
 
 
 def cube_origin(world: ClutterWorld, table_top_z: float) -> np.ndarray:
@@ -57,15 +55,7 @@ def _arm_spec(world: ClutterWorld, config: Any, origin: np.ndarray, names: list[
     scales = [world.scales[n] for n in names]
     assets = [world.assets[n] for n in names]
     spec = compose_posed(assets, poses, config.scene, config.robot, config.physics, scales)
-    eyes, target = camera_eyes(clutter.camera, clutter.scene.size_m)
-    for i, eye in enumerate(eyes):
-        spec.worldbody.add_camera(
-            name=f"{CAMERA_PREFIX}{i}",
-            pos=list(map(float, eye + origin)),
-            quat=list(map(float, look_at_quat(eye, target))),
-            fovy=clutter.camera.fovy_deg,
-            resolution=[clutter.camera.width_px, clutter.camera.height_px],
-        )
+    add_cameras(spec.worldbody, clutter.camera, clutter.scene.size_m, origin)
     return spec
 
 
@@ -105,8 +95,7 @@ def arm_env(world: ClutterWorld, kind: str, seed: int, config: Any) -> tuple[Any
 
 def _outside(env: Any, name: str, origin: np.ndarray, size_m: float) -> bool:
     """Their workspace test in the arm's world (centre of mass outside the cube)."""
-    p = env.data.xipos[env.info.object_body_ids[name]] - origin
-    return bool(np.any(p < 0.0) or np.any(p > size_m))
+    return outside_cube(env.data.xipos[env.info.object_body_ids[name]] - origin, size_m)
 
 
 def _remove_and_wait(env: Any, origin: np.ndarray, world: ClutterWorld) -> list[str]:

@@ -27,6 +27,7 @@ Array = NDArray[np.float64]
 OBJECT_PREFIX = "obj/"
 TABLE = "table"
 WALL_PREFIX = "pile_wall"
+CAMERA_PREFIX = "clutter_cam"
 #: Their cloud's crop lies this far inside the cube's sides (``place_table``: lx, ly = 0.02).
 CROP_INSET_M = 0.02
 #: Geom group of the pile box's walls: not one the cameras draw (they are gone before a look).
@@ -64,6 +65,27 @@ def look_at_quat(eye: Array, target: Array) -> Array:
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, np.column_stack([right, up, -forward]).ravel())
     return quat
+
+
+def add_cameras(worldbody: mujoco.MjsBody, cam: ClutterCameraConfig, size_m: float,
+                origin: Array | None = None) -> None:  # fmt: skip
+    """Their camera(s) (:func:`camera_eyes`) on ``worldbody``, their frame's origin at
+    ``origin`` (None: the world's)."""
+    shift = np.zeros(3) if origin is None else np.asarray(origin, float)
+    eyes, target = camera_eyes(cam, size_m)
+    for i, eye in enumerate(eyes):
+        worldbody.add_camera(
+            name=f"{CAMERA_PREFIX}{i}",
+            pos=list(map(float, eye + shift)),
+            quat=list(map(float, look_at_quat(eye, target))),
+            fovy=cam.fovy_deg,
+            resolution=[cam.width_px, cam.height_px],
+        )
+
+
+def outside_cube(position: Array, size_m: float) -> bool:
+    """Their workspace test: a position (in their frame) outside [0, size] on any axis."""
+    return bool(np.any(position < 0.0) or np.any(position > size_m))
 
 
 @dataclass
@@ -188,8 +210,7 @@ class ClutterWorld:
 
     def outside(self, name: str) -> bool:
         """Their workspace test: the object's position outside [0, size] on any axis."""
-        p = self.com(name)
-        return bool(np.any(p < 0.0) or np.any(p > self.config.scene.size_m))
+        return outside_cube(self.com(name), self.config.scene.size_m)
 
     def remove_and_wait(self) -> list[str]:
         """Their ``remove_and_wait``: come to rest, take out objects outside the workspace,
@@ -230,15 +251,7 @@ def compose_world(
         rgba=[0.6, 0.5, 0.4, 1.0],
     )
     physics.table.apply(table)
-    eyes, target = camera_eyes(cam, sc.size_m)
-    for i, eye in enumerate(eyes):
-        spec.worldbody.add_camera(
-            name=f"clutter_cam{i}",
-            pos=list(map(float, eye)),
-            quat=list(map(float, look_at_quat(eye, target))),
-            fovy=cam.fovy_deg,
-            resolution=[cam.width_px, cam.height_px],
-        )
+    add_cameras(spec.worldbody, cam, sc.size_m)
     if walls:
         lo, hi = np.array(sc.pile_box_lo_m), np.array(sc.pile_box_hi_m)
         t, h = sc.pile_wall_thickness_m, sc.pile_wall_height_m
