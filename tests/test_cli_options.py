@@ -10,21 +10,14 @@ import pytest
 import hsqbench.planner.learned.network as network
 from hsqbench.cli import build_parser, main
 from hsqbench.commands import _options
-
-
-def _parsers(parser: argparse.ArgumentParser, path: str = "hsqbench"):
-    """Every parser of the command line (commands and their actions), with its path."""
-    yield path, parser
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():
-                yield from _parsers(sub, f"{path} {name}")
+from tests.cli_parsers import command_parsers
 
 
 def test_every_option_of_every_command_has_help():
+    root = build_parser()
     missing = [
         f"{path} {action.option_strings or action.dest}"
-        for path, parser in _parsers(build_parser())
+        for path, parser in [("hsqbench", root), *command_parsers(root)]
         for action in parser._actions
         if action.help is None and not isinstance(action, argparse._SubParsersAction)
     ]

@@ -3,7 +3,6 @@ nothing written (a trial's result was lost to `--json DIR` after the whole trial
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import os
 import subprocess
@@ -16,6 +15,7 @@ from hsqbench.cli import build_parser, main
 from hsqbench.experiment.config import ExperimentConfig, IsolatedConfig
 from hsqbench.experiment.runner import run_benchmark
 from hsqbench.outputs import OutputPathError, check_output
+from tests.cli_parsers import command_parsers
 from tests.fake_backend import FakeBackend
 
 REPO = Path(__file__).resolve().parents[1]
@@ -25,17 +25,8 @@ OUTPUT_OPTIONS = {"--json", "--csv", "--png", "--mjcf", "--rerun", "--dest"}
 WRITES_RUN = {"benchmark", "ablate", "sweep"}
 
 
-def _commands(parser: argparse.ArgumentParser, path: str = ""):
-    if path:
-        yield path, parser
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():
-                yield from _commands(sub, f"{path} {name}".strip())
-
-
 def test_every_output_option_of_every_command_is_checked() -> None:
-    for name, parser in _commands(build_parser()):
+    for name, parser in command_parsers(build_parser()):
         options = {o for a in parser._actions for o in a.option_strings}
         wanted = {o for o in options if o in OUTPUT_OPTIONS}
         if "--run" in options and name in WRITES_RUN:

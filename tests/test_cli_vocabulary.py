@@ -13,6 +13,7 @@ import pytest
 
 from hsqbench.cli import build_parser
 from hsqbench.commands._deprecated import deprecated_aliases
+from tests.cli_parsers import command_parsers
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 
@@ -52,16 +53,6 @@ def _table() -> list[Row]:
     return rows
 
 
-def _parsers(parser: argparse.ArgumentParser, path: str = ""):
-    """(command path, parser) of every command and every action of a command."""
-    if path:
-        yield path, parser
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():
-                yield from _parsers(sub, f"{path} {name}".strip())
-
-
 def _own_actions(parser: argparse.ArgumentParser):
     """The parser's options and positionals, less help, sub-commands and old spellings."""
     old = set(deprecated_aliases(parser))
@@ -90,7 +81,7 @@ def _spelling(action: argparse.Action) -> str:
 def test_every_option_of_every_command_is_in_the_table_as_it_is_spelled():
     rows = {r.name: r for r in _table() if not r.spelling.startswith("hsqbench ")}
     problems = []
-    for path, parser in _parsers(build_parser()):
+    for path, parser in command_parsers(build_parser()):
         for action in _own_actions(parser):
             if len(action.option_strings) > 1:
                 problems.append(f"{path}: {action.option_strings} is one option, two names")
@@ -108,7 +99,7 @@ def test_every_option_of_every_command_is_in_the_table_as_it_is_spelled():
 def test_every_command_the_table_lists_has_the_option():
     options = {
         path: {_spelling(a).split()[0] for a in _own_actions(parser)}
-        for path, parser in _parsers(build_parser())
+        for path, parser in command_parsers(build_parser())
     }
     missing = [
         f"{command}: {row.spelling}"
@@ -124,7 +115,7 @@ def _aliases() -> list[tuple[str, str, str]]:
     """(command path, old spelling, new spelling) of every old spelling the parsers accept."""
     return [
         (path, old, new)
-        for path, parser in _parsers(build_parser())
+        for path, parser in command_parsers(build_parser())
         for old, new in deprecated_aliases(parser).items()
     ]
 
@@ -155,7 +146,7 @@ def _sample(action: argparse.Action) -> list[str]:
 
 @pytest.mark.parametrize(("path", "old", "new"), _aliases(), ids=lambda v: str(v))
 def test_an_old_spelling_parses_as_the_new_one_with_one_line_naming_it(path, old, new, capsys):
-    parser = dict(_parsers(build_parser()))[path]
+    parser = dict(command_parsers(build_parser()))[path]
     action = next(
         a
         for a in parser._actions
@@ -224,7 +215,7 @@ def _written_commands():
 
 
 def test_readme_docs_examples_and_help_use_only_the_new_spellings():
-    parsers = dict(_parsers(build_parser()))
+    parsers = dict(command_parsers(build_parser()))
     problems = []
     for where, command, words in _written_commands():
         if command not in parsers:
