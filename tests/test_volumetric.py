@@ -11,26 +11,18 @@ import pytest
 from hsqbench.planner.api import PlanningContext
 from hsqbench.planner.learned import volumetric, weights
 from hsqbench.planner.learned.volumetric_config import resolve_volumetric_config
-from hsqbench.planner.registry import get_planner, planner_names, unavailable
-from tests.volumetric_scene import TABLE, box_cloud, box_scene
+from hsqbench.planner.registry import planner_names, unavailable
+from tests.volumetric_scene import BOX, TABLE, box_cloud, box_scene, planner_or_skip
 
 pytestmark = pytest.mark.skipif(
     not volumetric.available(),
     reason="torch is not installed (the optional 'learned' extra: pip install -e '.[learned]')",
 )
 
-#: A 5 x 8 x 8 cm box: across y (5 cm) it fits the 7 cm width limit, across x (8 cm) it does not.
-BOX = (np.array([0.46, -0.025, 0.0]), np.array([0.54, 0.025, 0.08]))
-
 
 @pytest.fixture(scope="module", params=["vgn", "giga"])
 def planner(request):
-    try:
-        for training in ("packed", "pile"):
-            weights.weights_path(request.param, training, "unused", download=False)
-    except weights.WeightsError as exc:
-        pytest.skip(f"the published weights are not here ({exc}); set HSQ_MODELS_DIR")
-    return get_planner(request.param)
+    return planner_or_skip(request.param)
 
 
 def _context(boxes, scene="isolated", seed=0) -> PlanningContext:

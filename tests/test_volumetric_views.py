@@ -10,12 +10,9 @@ import numpy as np
 import pytest
 
 from hsqbench.planner.api import PlanningContext
-from hsqbench.planner.learned import volumetric, weights
-from hsqbench.planner.registry import get_planner
-from tests.volumetric_scene import CAMERAS, TABLE, box_cloud, render
+from hsqbench.planner.learned import volumetric
+from tests.volumetric_scene import BOX, CAMERAS, TABLE, box_cloud, planner_or_skip, render
 
-#: A 5 x 8 x 8 cm box: across y (5 cm) it fits the 7 cm width limit, across x (8 cm) it does not.
-BOX = (np.array([0.46, -0.025, 0.0]), np.array([0.54, 0.025, 0.08]))
 VOXEL_M = 0.0075
 
 
@@ -36,14 +33,7 @@ def test_the_yaw_puts_the_camera_on_the_cubes_minus_y_side(camera):
 
 @pytest.fixture(scope="module", params=["vgn", "giga"])
 def per_view(request):
-    try:
-        for training in ("packed", "pile"):
-            weights.weights_path(request.param, training, "unused", download=False)
-    except weights.WeightsError as exc:
-        pytest.skip(f"the published weights are not here ({exc}); set HSQ_MODELS_DIR")
-    if not volumetric.available():
-        pytest.skip("torch is not installed (the optional 'learned' extra)")
-    base = get_planner(request.param)
+    base = planner_or_skip(request.param)
     return type(base)(request.param, dataclasses.replace(base.config, input="per_view"))
 
 

@@ -14,6 +14,26 @@ from hsqbench.planner.learned.frames import look_at_frame
 CAMERAS = np.array([[0.62, 0.78, 0.55], [0.62, -0.78, 0.55]])
 TARGET = np.array([0.5, 0.0, 0.0])
 TABLE = (0.0, 0.0, 1.0, 0.0)
+#: A 5 x 8 x 8 cm box: across y (5 cm) it fits the 7 cm width limit, across x (8 cm) it does not.
+BOX = (np.array([0.46, -0.025, 0.0]), np.array([0.54, 0.025, 0.08]))
+
+
+def planner_or_skip(name: str):
+    """The registered planner ``name`` (vgn or giga), or the test skipped when the published
+    weights or torch are not here."""
+    import pytest
+
+    from hsqbench.planner.learned import volumetric, weights
+    from hsqbench.planner.registry import get_planner
+
+    try:
+        for training in ("packed", "pile"):
+            weights.weights_path(name, training, "unused", download=False)
+    except weights.WeightsError as exc:
+        pytest.skip(f"the published weights are not here ({exc}); set HSQ_MODELS_DIR")
+    if not volumetric.available():
+        pytest.skip("torch is not installed (the optional 'learned' extra)")
+    return get_planner(name)
 
 
 @dataclass(frozen=True)
