@@ -83,12 +83,12 @@ class Grasp:
             raise InvalidGrasp(f"grasp width must be a finite length >= 0 m, got {width}")
         object.__setattr__(self, "position", position)
         object.__setattr__(self, "rotation", rotation)
-        if not (np.isnan(self.approach_width) or self.approach_width >= self.width):
+        if not (np.isnan(self.approach_width) or self.approach_width >= width):
             raise InvalidGrasp(
                 f"grasp approach_width ({self.approach_width} m) must be at least its width "
                 f"({self.width} m)"
             )
-        object.__setattr__(self, "width", float(self.width))
+        object.__setattr__(self, "width", width)
         object.__setattr__(self, "approach_width", float(self.approach_width))
         object.__setattr__(self, "score", score)
 
