@@ -104,7 +104,11 @@ def test_a_sweep_point_counts_planner_errors_as_failures(quick_run):
     from hsqbench.experiment.sweep_table import run_rows
 
     data, rows, _ = quick_run
-    for row in run_rows(data, ["isolated", "packed"]):
+    points = run_rows(data, ["isolated", "packed"])
+    assert {(r["planner"], r["experiment"]) for r in points} == {
+        (p, e) for p in ("raises", "nan-pose") for e in ("isolated", "packed")
+    }
+    for row in points:
         n = sum(
             r["planner"] == row["planner"] and r["experiment"] == row["experiment"] for r in rows
         )
