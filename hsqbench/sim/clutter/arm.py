@@ -170,7 +170,7 @@ def _arm_attempt(env: Any, planner: Any, kind: str, config: Any, rngs: dict) -> 
 def _arm_execute(env: Any, grasps: Any, points: Any, common: dict, config: Any) -> Attempt:
     """Motion-plan the grasps in order and execute the first reachable one with the arm, up to
     ``clutter.arm_until``."""
-    from hsqbench.sim.trial.attempt import AttemptTrace, plan_motions
+    from hsqbench.sim.trial.attempt import AttemptTrace, grasp_fields, plan_motions
     from hsqbench.sim.trial.execution import execute_grasp
 
     trace = AttemptTrace()
@@ -202,10 +202,7 @@ def _arm_execute(env: Any, grasps: Any, points: Any, common: dict, config: Any) 
     return Attempt(
         outcome,
         target=target,
-        rank_executed=chosen.rank,
-        score=float(grasp.score),
-        factors={k: float(v) for k, v in grasp.factors.items()},
-        width_m=float(grasp.width),
+        **grasp_fields(grasp, chosen.rank),
         execution_s=time.perf_counter() - t0,
         grasp_pose=pose7(motion.grasp_pose.position, motion.grasp_pose.rotation),
         grasp_flipped=motion.flipped,

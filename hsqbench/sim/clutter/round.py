@@ -24,6 +24,7 @@ from hsqbench.sim.clutter.step import RoundTally, plan_step, round_streams
 from hsqbench.sim.clutter.world import ClutterWorld
 from hsqbench.sim.outcome import Attempt, Outcome, RoundResult
 from hsqbench.sim.recorded_pose import pose7
+from hsqbench.sim.trial.attempt import grasp_fields
 
 
 def _perception(world: ClutterWorld, rng: np.random.Generator) -> Any:
@@ -108,10 +109,7 @@ def _attempt(
     return Attempt(
         outcome,
         target=res.target,
-        rank_executed=0,
-        score=float(grasp.score),
-        factors={k: float(v) for k, v in grasp.factors.items()},
-        width_m=float(grasp.width),
+        **grasp_fields(grasp, 0),
         execution_s=time.perf_counter() - t2,
         grasp_pose=pose7(position, rotation),
         sim_time_s=res.sim_time_s,

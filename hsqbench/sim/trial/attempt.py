@@ -142,6 +142,16 @@ def plan_fields(
     }
 
 
+def grasp_fields(grasp: Any, rank: int) -> dict[str, Any]:
+    """What an attempt records of the grasp it executed, the ``rank``-th of the planner's."""
+    return {
+        "rank_executed": rank,
+        "score": float(grasp.score),
+        "factors": {k: float(v) for k, v in grasp.factors.items()},
+        "width_m": float(grasp.width),
+    }
+
+
 def _pose_of(env: TrialEnv, presented: dict[str, Any], name: str) -> dict[str, Any]:
     # The target's pose as perceived (nothing has moved yet); isolated scenes have it already.
     if "object_pose" in presented or not name:
@@ -243,10 +253,7 @@ def _execute(
     attempt = Attempt(
         res.outcome,
         target=res.target,
-        rank_executed=chosen.rank,
-        score=float(grasp.score),
-        factors={k: float(v) for k, v in grasp.factors.items()},
-        width_m=float(grasp.width),
+        **grasp_fields(grasp, chosen.rank),
         execution_s=time.perf_counter() - t0,
         grasp_pose=pose7(motion.grasp_pose.position, motion.grasp_pose.rotation),
         grasp_flipped=motion.flipped,
