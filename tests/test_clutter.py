@@ -255,3 +255,15 @@ def test_a_hand_round_on_one_box_clears_it_and_stops_on_a_clear_table(compiled) 
     assert result.objects == [box] and result.objects_cleared == [box]
     assert result.objects_lost == [] and result.objects_unplaced == []
     assert result.planner == "oracle" and result.seed == 0
+
+
+def test_an_arm_round_on_one_box_clears_it_and_stops_on_a_clear_table(compiled) -> None:
+    from hsqbench.sim.clutter.arm import run_arm_round
+    from hsqbench.sim.trial import load_trial_config
+
+    world, box = _fresh(compiled)
+    result = run_arm_round(world, "packed", 0, "oracle", load_trial_config("trial_clutter_arm"))
+    assert [a.outcome for a in result.attempts] == [Outcome.SUCCESS]
+    assert result.attempts[0].detail.startswith("held after the lift")
+    assert result.objects == [box] and result.objects_cleared == [box]
+    assert result.objects_lost == [] and result.objects_unplaced == []
