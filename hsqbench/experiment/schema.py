@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from hsqbench.sim.outcome import Outcome
 
-#: kind -> (pandas dtype, what an empty field is). Text kinds differ only in what they document.
+#: kind -> (pandas dtype, what an empty field is).
 KINDS: dict[str, tuple[str, str]] = {
     "int": ("int64", "never empty"),
     "count": ("float64", "NaN where empty"),  # whole numbers, absent on some rows
@@ -26,7 +26,6 @@ KINDS: dict[str, tuple[str, str]] = {
     "bool": ("float64", "1.0 / 0.0, NaN where empty"),
     "text": ("str", '"" where empty'),
 }
-TEXT_KINDS = ("text",)
 
 
 class SchemaError(ValueError):
