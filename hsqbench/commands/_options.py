@@ -23,7 +23,7 @@ An old spelling keeps working for one release (:mod:`hsqbench.commands._deprecat
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -39,27 +39,27 @@ PLANNER_SPEC_HELP = (
 RUN_HELP = "a name under runs/ or a folder path"
 
 
-def non_negative_int(text: str) -> int:
-    """An integer >= 0 (for seeds: NumPy's generators take no negative one), or argparse's
-    usage error naming the option."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
+def int_at_least(low: int) -> Callable[[str], int]:
+    """An argparse type: an integer >= ``low``, or argparse's usage error naming the option."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected a whole number >= {low}, got {text!r}"
+            ) from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be >= {low}, got {value}")
+        return value
+
+    return parse
 
 
-def positive_int(text: str) -> int:
-    """An integer >= 1 (for ``--jobs`` and counts), or argparse's usage error."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
+#: Seeds (NumPy's generators take no negative one).
+non_negative_int = int_at_least(0)
+#: ``--jobs`` and counts.
+positive_int = int_at_least(1)
 
 
 def add_jobs(
